@@ -1,0 +1,117 @@
+//! Shared by every kernel test: one GPU per test binary, a seeded RNG, tolerance checks and
+//! central finite differences of plain-Rust f64 reference functions.
+//!
+//! Tolerance policy: GPU results are f32 and compared with `|got - want| <= atol + rtol*|want|`.
+//! f32 has a unit roundoff of 6e-8; a sum of K terms of size ~1 accumulates ~sqrt(K)*6e-8
+//! relative error, so for the K <= ~10^4 of our test shapes rtol = 1e-4 with atol scaled to
+//! the output's magnitude leaves > 10x headroom while any real bug (a dropped term, a
+//! flipped sign, an off-by-one tap) shows up at 1e-2 or more. Finite differences run on the
+//! f64 reference with step h = 1e-6 (truncation ~h^2, roundoff ~1e-16/h, both far below
+//! the f32 error of the GPU gradient they are compared with).
+#![allow(dead_code)]
+
+use rendernet::{Gpu, Tensor};
+use std::sync::OnceLock;
+
+/// The test GPU, opened once per test binary (tests in it run on threads).
+pub fn gpu() -> &'static Gpu {
+    static GPU: OnceLock<Gpu> = OnceLock::new();
+    GPU.get_or_init(|| {
+        // SAFETY-free: set before any wgpu use so Mesa does not warn on a missing runtime dir.
+        Gpu::new().unwrap_or_else(|e| panic!("kernel tests need a GPU or lavapipe: {e}"))
+    })
+}
+
+/// SplitMix64: small, seeded, reproducible.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [lo, hi).
+    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
+    }
+    /// `n` values uniform in [lo, hi).
+    pub fn vec(&mut self, n: usize, lo: f64, hi: f64) -> Vec<f64> {
+        (0..n).map(|_| self.uniform(lo, hi)).collect()
+    }
+}
+
+/// Uploads f64 values as an f32 tensor.
+pub fn upload(shape: &[usize], data: &[f64]) -> Tensor {
+    let v: Vec<f32> = data.iter().map(|&x| x as f32).collect();
+    Tensor::from_slice(gpu(), shape, &v).expect("upload")
+}
+
+/// A zero tensor.
+pub fn zeros(shape: &[usize]) -> Tensor {
+    Tensor::zeros(gpu(), shape).expect("alloc")
+}
+
+/// Downloads a tensor as f64.
+pub fn download(t: &Tensor) -> Vec<f64> {
+    t.to_vec(gpu()).expect("download").iter().map(|&x| x as f64).collect()
+}
+
+/// Rounds through f32, so references see exactly the inputs the GPU sees.
+pub fn f32_round(v: &[f64]) -> Vec<f64> {
+    v.iter().map(|&x| x as f32 as f64).collect()
+}
+
+/// Panics with the worst offender if any `|got - want| > atol + rtol * |want|`.
+pub fn assert_close(what: &str, got: &[f64], want: &[f64], atol: f64, rtol: f64) {
+    assert_eq!(got.len(), want.len(), "{what}: length {} vs reference {}", got.len(), want.len());
+    let mut worst = (0.0f64, 0usize);
+    for (i, (&g, &w)) in got.iter().zip(want).enumerate() {
+        let excess = (g - w).abs() - (atol + rtol * w.abs());
+        if !(excess <= worst.0) || g.is_nan() {
+            worst = (if g.is_nan() { f64::INFINITY } else { excess }, i);
+        }
+    }
+    if worst.0 > 0.0 {
+        let i = worst.1;
+        panic!(
+            "{what}: element {i} is {} but the reference says {} (atol {atol}, rtol {rtol}); \
+             max |reference| {}",
+            got[i],
+            want[i],
+            want.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+        );
+    }
+    // A check against an all-zero reference proves little: make tests use real signal.
+    assert!(want.iter().any(|&w| w.abs() > atol), "{what}: reference is all ~zero, test is vacuous");
+}
+
+/// Central finite differences of `f` at `x`: d f / d x_i for every i.
+pub fn fd_grad(x: &[f64], f: impl Fn(&[f64]) -> f64) -> Vec<f64> {
+    let h = 1e-6;
+    let mut xp = x.to_vec();
+    (0..x.len())
+        .map(|i| {
+            let x0 = xp[i];
+            xp[i] = x0 + h;
+            let fp = f(&xp);
+            xp[i] = x0 - h;
+            let fm = f(&xp);
+            xp[i] = x0;
+            (fp - fm) / (2.0 * h)
+        })
+        .collect()
+}
+
+/// `Σ r_i y_i`: the scalar whose gradient w.r.t. y is `r`, used to test backward passes
+/// with a random upstream gradient `r`.
+pub fn dot(r: &[f64], y: &[f64]) -> f64 {
+    r.iter().zip(y).map(|(a, b)| a * b).sum()
+}
+
+/// Runs `f` in one compute pass and waits.
+pub fn run(f: impl FnOnce(&mut wgpu::ComputePass<'_>) -> rendernet::Result<()>) {
+    gpu().run(f).expect("dispatch");
+}

@@ -1,0 +1,35 @@
+//! Every `.wgsl` in `shaders/` parses and validates with naga, so a syntax or type error is
+//! caught here with a file name instead of as a panic inside a pipeline creation.
+
+#[test]
+fn every_shader_parses_and_validates() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+    let mut checked = 0;
+    let mut failures = Vec::new();
+    for entry in std::fs::read_dir(&dir).expect("shaders/ exists") {
+        let path = entry.unwrap().path();
+        if path.extension().and_then(|e| e.to_str()) != Some("wgsl") {
+            continue;
+        }
+        let src = std::fs::read_to_string(&path).unwrap();
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        match naga::front::wgsl::parse_str(&src) {
+            Err(e) => failures.push(format!("{name}: {}", e.emit_to_string(&src))),
+            Ok(module) => {
+                let mut v = naga::valid::Validator::new(
+                    naga::valid::ValidationFlags::all(),
+                    naga::valid::Capabilities::empty(),
+                );
+                if let Err(e) = v.validate(&module) {
+                    failures.push(format!("{name}: {}", e.emit_to_string(&src)));
+                }
+                if module.entry_points.is_empty() {
+                    failures.push(format!("{name}: no entry points"));
+                }
+            }
+        }
+        checked += 1;
+    }
+    assert!(failures.is_empty(), "invalid shaders:\n{}", failures.join("\n"));
+    assert!(checked >= 3, "expected shaders in {}, found {checked}", dir.display());
+}

@@ -1,0 +1,37 @@
+// Deterministic sums. `x` is viewed as [A, B, C]; out[b] = scale * sum over a and c of
+// x[a, b, c]. One 64-invocation workgroup per output element: strided partial sums then a
+// fixed-order tree, so results do not depend on scheduling (bit-identical reruns).
+// Serves bias and PReLU-alpha gradients (A = N, B = channels, C = spatial), loss means
+// (A = B = 1) and per-parameter gradient partials (pose, light).
+
+struct Params { a: u32, b: u32, c: u32, scale: f32 }
+@group(0) @binding(0) var<uniform> p: Params;
+@group(0) @binding(1) var<storage, read> x: array<f32>;
+@group(0) @binding(2) var<storage, read_write> out: array<f32>;
+
+var<workgroup> partial: array<f32, 64>;
+
+@compute @workgroup_size(64)
+fn sum_outer_inner(@builtin(local_invocation_index) lid: u32,
+                   @builtin(workgroup_id) wid: vec3<u32>,
+                   @builtin(num_workgroups) nwg: vec3<u32>) {
+    // Uniform control flow: every invocation reaches the barriers, even past the end.
+    let b = wid.x + wid.y * nwg.x;
+    let valid = b < p.b;
+    var s = 0.0;
+    if (valid) {
+        let total = p.a * p.c;
+        for (var k = lid; k < total; k += 64u) {
+            let ai = k / p.c;
+            let ci = k - ai * p.c;
+            s += x[(ai * p.b + b) * p.c + ci];
+        }
+    }
+    partial[lid] = s;
+    workgroupBarrier();
+    for (var w = 32u; w > 0u; w >>= 1u) {
+        if (lid < w) { partial[lid] += partial[lid + w]; }
+        workgroupBarrier();
+    }
+    if (valid && lid == 0u) { out[b] = partial[0] * p.scale; }
+}

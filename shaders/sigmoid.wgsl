@@ -1,0 +1,27 @@
+// Logistic sigmoid. Forward y = 1 / (1 + e^-x); backward dx = dy * y * (1 - y), computed
+// from the saved output so the input need not be kept.
+
+struct Params { n: u32 }
+@group(0) @binding(0) var<uniform> p: Params;
+
+@group(0) @binding(1) var<storage, read> fx: array<f32>;
+@group(0) @binding(2) var<storage, read_write> fy: array<f32>;
+
+@compute @workgroup_size(64)
+fn sigmoid_forward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    if (i >= p.n) { return; }
+    fy[i] = 1.0 / (1.0 + exp(-fx[i]));
+}
+
+@group(0) @binding(1) var<storage, read> by: array<f32>;
+@group(0) @binding(2) var<storage, read> bdy: array<f32>;
+@group(0) @binding(3) var<storage, read_write> bdx: array<f32>;
+
+@compute @workgroup_size(64)
+fn sigmoid_backward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    if (i >= p.n) { return; }
+    let y = by[i];
+    bdx[i] = bdy[i] * y * (1.0 - y);
+}

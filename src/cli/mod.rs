@@ -1,0 +1,3 @@
+//! Subcommand implementations: parse, call the library, report.
+
+pub mod info;

@@ -1,0 +1,170 @@
+//! The pipeline cache and the single dispatch path. Every kernel binds a uniform parameter
+//! block at binding 0 and storage buffers at 1..; layouts are explicit (wgpu's automatic
+//! layouts drop unused bindings, which would make a binding's index depend on the code).
+
+use super::{Gpu, Tensor};
+use crate::error::{Error, Result};
+use std::sync::Arc;
+use wgpu::util::DeviceExt;
+
+/// The WebGPU limit on workgroups per dispatch dimension.
+pub const MAX_WORKGROUPS_PER_DIM: u32 = 65535;
+
+/// A WGSL source file, embedded at build time. `name` keys the caches.
+#[derive(Clone, Copy, Debug)]
+pub struct Shader {
+    /// File stem, e.g. `"conv"` for `shaders/conv.wgsl`.
+    pub name: &'static str,
+    /// The WGSL text.
+    pub source: &'static str,
+}
+
+/// One storage binding of a dispatch, in binding order starting at 1.
+pub enum Arg<'a> {
+    /// Read-only storage (`var<storage, read>`).
+    R(&'a Tensor),
+    /// Read-write storage (`var<storage, read_write>`).
+    W(&'a Tensor),
+    /// An absent optional read-only input; the shader must not read it (a flag says so).
+    Absent,
+}
+
+pub(crate) struct Pipeline {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+/// Splits `threads` invocations into a 2D grid of `wg`-sized workgroups within the
+/// per-dimension limit. Shaders rebuild the linear index as
+/// `gid.x + gid.y * nwg.x * WG` and return when it is past the end.
+pub fn grid_1d(threads: u64, wg: u32) -> Result<[u32; 3]> {
+    let groups = threads.div_ceil(wg as u64).max(1);
+    let max = MAX_WORKGROUPS_PER_DIM as u64;
+    if groups <= max {
+        return Ok([groups as u32, 1, 1]);
+    }
+    let y = groups.div_ceil(max);
+    if y > max {
+        return Err(Error::Limit {
+            what: "workgroups in one dispatch".into(),
+            value: groups,
+            limit: max * max,
+            name: "max_compute_workgroups_per_dimension squared",
+        });
+    }
+    Ok([groups.div_ceil(y) as u32, y as u32, 1])
+}
+
+impl Gpu {
+    fn pipeline(&self, shader: Shader, entry: &'static str, args: &[Arg]) -> Arc<Pipeline> {
+        let mut cache = self.pipelines.lock().unwrap();
+        if let Some(p) = cache.get(&(shader.name, entry)) {
+            return p.clone();
+        }
+        let module = {
+            let mut modules = self.modules.lock().unwrap();
+            modules
+                .entry(shader.name)
+                .or_insert_with(|| {
+                    self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                        label: Some(shader.name),
+                        source: wgpu::ShaderSource::Wgsl(shader.source.into()),
+                    })
+                })
+                .clone()
+        };
+        let mut entries = vec![wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }];
+        for (i, a) in args.iter().enumerate() {
+            let read_only = !matches!(a, Arg::W(_));
+            entries.push(wgpu::BindGroupLayoutEntry {
+                binding: i as u32 + 1,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            });
+        }
+        let label = format!("{}::{}", shader.name, entry);
+        let layout = self.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(&label),
+            entries: &entries,
+        });
+        let pl = self.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(&label),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(&label),
+            layout: Some(&pl),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let p = Arc::new(Pipeline { pipeline, layout });
+        cache.insert((shader.name, entry), p.clone());
+        p
+    }
+
+    /// Records one dispatch of `shader::entry` into `pass`. `params` is the kernel's uniform
+    /// block (a `#[repr(C)]` Pod struct), `args` its storage buffers in binding order.
+    pub fn dispatch<P: bytemuck::Pod>(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        shader: Shader,
+        entry: &'static str,
+        params: &P,
+        args: &[Arg],
+        workgroups: [u32; 3],
+    ) -> Result<()> {
+        for (i, &w) in workgroups.iter().enumerate() {
+            if w > self.limits.max_compute_workgroups_per_dimension {
+                return Err(Error::Limit {
+                    what: format!("{}::{entry} workgroups along axis {i}", shader.name),
+                    value: w as u64,
+                    limit: self.limits.max_compute_workgroups_per_dimension as u64,
+                    name: "max_compute_workgroups_per_dimension",
+                });
+            }
+        }
+        let p = self.pipeline(shader, entry, args);
+        // Uniform blocks are padded to 16 bytes, as WGSL rounds struct sizes for uniforms.
+        let mut bytes = bytemuck::bytes_of(params).to_vec();
+        bytes.resize(bytes.len().div_ceil(16).max(1) * 16, 0);
+        let ubuf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("params"),
+            contents: &bytes,
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let mut entries = vec![wgpu::BindGroupEntry { binding: 0, resource: ubuf.as_entire_binding() }];
+        for (i, a) in args.iter().enumerate() {
+            let buf = match a {
+                Arg::R(t) | Arg::W(t) => t.buffer(),
+                Arg::Absent => &self.dummy,
+            };
+            entries.push(wgpu::BindGroupEntry { binding: i as u32 + 1, resource: buf.as_entire_binding() });
+        }
+        let bg = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &p.layout,
+            entries: &entries,
+        });
+        pass.set_pipeline(&p.pipeline);
+        pass.set_bind_group(0, &bg, &[]);
+        pass.dispatch_workgroups(workgroups[0], workgroups[1], workgroups[2]);
+        Ok(())
+    }
+}

@@ -1,0 +1,106 @@
+//! The GPU runtime: device, tensors, the pipeline cache and the one dispatch path every op
+//! uses. Ops record into a caller's [`wgpu::ComputePass`] so a whole step shares one submit.
+
+mod context;
+mod kernel;
+mod pool;
+mod tensor;
+
+pub use kernel::{Arg, Shader, grid_1d, MAX_WORKGROUPS_PER_DIM};
+pub use pool::BufferPool;
+pub use tensor::Tensor;
+
+use crate::error::{Error, Result};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+/// A GPU (or lavapipe) device with its queue, limits and caches.
+pub struct Gpu {
+    /// The wgpu device.
+    pub device: wgpu::Device,
+    /// The queue all work is submitted to.
+    pub queue: wgpu::Queue,
+    /// Which adapter this is (name, backend, driver).
+    pub info: wgpu::AdapterInfo,
+    /// The adapter's real limits, which the device was opened with.
+    pub limits: wgpu::Limits,
+    /// Optional features that were enabled (timestamp queries when present).
+    pub features: wgpu::Features,
+    pipelines: Mutex<HashMap<(&'static str, &'static str), Arc<kernel::Pipeline>>>,
+    modules: Mutex<HashMap<&'static str, wgpu::ShaderModule>>,
+    /// Bound in place of an absent optional input (a conv without bias): wgpu forbids
+    /// binding the same buffer as read and read-write in one dispatch, so aliasing is no option.
+    dummy: wgpu::Buffer,
+}
+
+impl Gpu {
+    /// Opens the adapter chosen by `WGPU_BACKEND` / `WGPU_ADAPTER_NAME`, or the best present.
+    /// With no adapter, the error says what was tried and how to install lavapipe.
+    pub fn new() -> Result<Gpu> {
+        let o = context::open()?;
+        let dummy = o.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("dummy"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        Ok(Gpu {
+            device: o.device,
+            queue: o.queue,
+            info: o.info,
+            limits: o.limits,
+            features: o.features,
+            pipelines: Mutex::new(HashMap::new()),
+            modules: Mutex::new(HashMap::new()),
+            dummy,
+        })
+    }
+
+    /// Whether GPU timestamps can be taken inside compute passes.
+    pub fn has_timestamps(&self) -> bool {
+        self.features.contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES)
+    }
+
+    /// Records `f` into one compute pass of a fresh encoder, submits it and waits.
+    /// Convenient for tests and one-off ops; a training step records many ops into one pass.
+    pub fn run<T>(&self, f: impl FnOnce(&mut wgpu::ComputePass<'_>) -> Result<T>) -> Result<T> {
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        let out = {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            f(&mut pass)?
+        };
+        self.submit_and_wait(enc)?;
+        Ok(out)
+    }
+
+    /// Submits one encoder and blocks until the device has finished it.
+    pub fn submit_and_wait(&self, enc: wgpu::CommandEncoder) -> Result<()> {
+        let idx = self.queue.submit([enc.finish()]);
+        self.device
+            .poll(wgpu::PollType::Wait { submission_index: Some(idx), timeout: None })
+            .map(|_| ())
+            .map_err(|e| Error::Device(format!("waiting for the GPU failed: {e}")))
+    }
+
+    /// Checks that `bytes` fit one storage binding and one buffer on this device.
+    pub fn check_binding_size(&self, what: &str, bytes: u64) -> Result<()> {
+        let lim = self.limits.max_storage_buffer_binding_size as u64;
+        if bytes > lim {
+            return Err(Error::Limit {
+                what: format!("{what} size in bytes"),
+                value: bytes,
+                limit: lim,
+                name: "max_storage_buffer_binding_size",
+            });
+        }
+        if bytes > self.limits.max_buffer_size {
+            return Err(Error::Limit {
+                what: format!("{what} size in bytes"),
+                value: bytes,
+                limit: self.limits.max_buffer_size,
+                name: "max_buffer_size",
+            });
+        }
+        Ok(())
+    }
+}

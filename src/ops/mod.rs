@@ -1,0 +1,51 @@
+//! The differentiable op set. One file per op binds one `shaders/<op>.wgsl`, with forward
+//! and backward entry points side by side; every function records into a caller's compute
+//! pass and checks shapes and limits before anything is dispatched.
+//!
+//! Conventions: tensors NCDHW / NCHW, weights OIDHW / OIHW (PyTorch's), f32. Outputs are
+//! caller-allocated so a memory planner can place them; backward functions write (never
+//! accumulate into) their gradient outputs.
+
+pub mod elu;
+pub mod reduce;
+pub mod sigmoid;
+
+use crate::error::{Result, shape_err};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
+
+/// Dispatches an elementwise kernel of 64-wide workgroups over `n` values, after checking
+/// that every tensor argument holds exactly `n` values.
+pub(crate) fn elementwise<P: bytemuck::Pod>(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    shader: Shader,
+    entry: &'static str,
+    params: &P,
+    args: &[Arg],
+    n: usize,
+) -> Result<()> {
+    for a in args {
+        if let Arg::R(t) | Arg::W(t) = a {
+            if t.numel() != n {
+                return Err(shape_err(entry, format!("tensor {:?} should hold {n} values", t.shape())));
+            }
+        }
+    }
+    gpu.dispatch(pass, shader, entry, params, args, grid_1d(n as u64, 64)?)
+}
+
+/// Checks that `t` has exactly `shape`, naming the op and the argument.
+pub(crate) fn expect_shape(op: &str, arg: &str, t: &Tensor, shape: &[usize]) -> Result<()> {
+    if t.shape() != shape {
+        return Err(shape_err(op, format!("{arg} has shape {:?}, expected {shape:?}", t.shape())));
+    }
+    Ok(())
+}
+
+/// Checks that `t` has `rank` dimensions, naming the op and the argument.
+pub(crate) fn expect_rank(op: &str, arg: &str, t: &Tensor, rank: usize) -> Result<()> {
+    if t.shape().len() != rank {
+        return Err(shape_err(op, format!("{arg} has shape {:?}, expected {rank} dimensions", t.shape())));
+    }
+    Ok(())
+}
