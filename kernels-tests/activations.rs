@@ -1,16 +1,17 @@
-//! Sigmoid and ELU against f64 references, forward and finite-difference backward; and the
-//! deterministic reduction they and other backward passes rely on.
+//! The elementwise ops (sigmoid, ELU, PReLU, dropout, residual add) against f64 references,
+//! forward and finite-difference backward; and the deterministic reduction that backward
+//! passes rely on.
 
 mod common;
+mod reference;
 use common::*;
-use rendernet::ops::{elu, reduce, sigmoid};
+use reference::activations::{dropout as dropout_ref, elu as elu_ref, prelu as prelu_ref, sigmoid as sigmoid_ref};
+use rendernet::ops::{add, dropout::Dropout, elu, prelu, reduce, sigmoid};
 
-fn sigmoid_ref(x: &[f64]) -> Vec<f64> {
-    x.iter().map(|&v| 1.0 / (1.0 + (-v).exp())).collect()
-}
-
-fn elu_ref(alpha: f64, x: &[f64]) -> Vec<f64> {
-    x.iter().map(|&v| if v > 0.0 { v } else { alpha * (v.exp() - 1.0) }).collect()
+/// Random values kept at least `gap` away from 0, where PReLU and ELU have kinks that a
+/// finite difference must not straddle.
+fn away_from_zero(rng: &mut Rng, n: usize, gap: f64) -> Vec<f64> {
+    f32_round(&rng.vec(n, -3.0, 3.0)).into_iter().map(|v| if v.abs() < gap { v.signum() * gap + v } else { v }).collect()
 }
 
 // Odd, non-power-of-two shape with batch > 1.
@@ -38,7 +39,7 @@ fn elu_forward_and_backward() {
     let alpha = 1.3;
     let mut rng = Rng(2);
     // Keep away from the kink at 0 so finite differences do not straddle it.
-    let x: Vec<f64> = f32_round(&rng.vec(n, -3.0, 3.0)).into_iter().map(|v| if v.abs() < 1e-3 { 0.5 } else { v }).collect();
+    let x = f32_round(&away_from_zero(&mut rng, n, 1e-3));
     let r = f32_round(&rng.vec(n, -1.0, 1.0));
     let (tx, ty, tr, tdx) = (upload(&SHAPE, &x), zeros(&SHAPE), upload(&SHAPE, &r), zeros(&SHAPE));
     run(|p| {
@@ -72,4 +73,85 @@ fn mismatched_shapes_are_errors_not_panics() {
     assert!(err.to_string().contains("sigmoid_forward"), "{err}");
     let err = gpu().run(|p| reduce::sum_outer_inner(gpu(), p, &tx, [2, 2, 2], 1.0, &ty)).unwrap_err();
     assert!(err.to_string().contains("does not match"), "{err}");
+}
+
+#[test]
+fn prelu_forward_and_backward() {
+    // [N, C, D, H, W] = [2, 5, 3, 4, 3]: channels not a multiple of 4, odd spatial dims.
+    let shape = [2, 5, 3, 4, 3];
+    let (c, s) = (5, 36);
+    let n: usize = shape.iter().product();
+    let mut rng = Rng(4);
+    let x = f32_round(&away_from_zero(&mut rng, n, 1e-3));
+    let alpha = f32_round(&rng.vec(c, -0.5, 0.5));
+    let r = f32_round(&rng.vec(n, -1.0, 1.0));
+    let (tx, ta, ty, tr) = (upload(&shape, &x), upload(&[c], &alpha), zeros(&shape), upload(&shape, &r));
+    let (tdx, tda) = (zeros(&shape), zeros(&[c]));
+    run(|p| {
+        prelu::forward(gpu(), p, &tx, &ta, &ty)?;
+        prelu::backward(gpu(), p, &tx, &ta, &tr, &tdx, &tda)
+    });
+    assert_close("prelu forward", &download(&ty), &prelu_ref(&x, &alpha, c, s), 1e-6, 1e-5);
+    let want_dx = fd_grad(&x, |x| dot(&r, &prelu_ref(x, &alpha, c, s)));
+    assert_close("prelu backward input", &download(&tdx), &want_dx, 1e-6, 1e-4);
+    // dalpha sums ~36 terms of size <= 3 per channel: 1e-5 absolute is > 10x f32 error.
+    let want_da = fd_grad(&alpha, |a| dot(&r, &prelu_ref(&x, a, c, s)));
+    assert_close("prelu backward alpha", &download(&tda), &want_da, 1e-5, 1e-4);
+}
+
+#[test]
+fn prelu_rejects_wrong_alpha() {
+    let (tx, ta, ty) = (zeros(&[2, 3, 4]), zeros(&[4]), zeros(&[2, 3, 4]));
+    let err = gpu().run(|p| prelu::forward(gpu(), p, &tx, &ta, &ty)).unwrap_err();
+    assert!(err.to_string().contains("alpha"), "{err}");
+}
+
+#[test]
+fn dropout_mask_is_seeded_and_shared_by_backward() {
+    let shape = [3, 7, 11];
+    let n: usize = shape.iter().product();
+    let keep = 0.7;
+    let mut rng = Rng(5);
+    let x = f32_round(&rng.vec(n, 0.5, 2.0)); // nonzero, so the mask is visible in y
+    let r = f32_round(&rng.vec(n, -1.0, 1.0));
+    let d = Dropout { keep_prob: keep as f32 };
+    let (tx, ty, ty2, tr, tdx) = (upload(&shape, &x), zeros(&shape), zeros(&shape), upload(&shape, &r), zeros(&shape));
+    run(|p| {
+        d.forward(gpu(), p, 42, &tx, &ty)?;
+        d.forward(gpu(), p, 43, &tx, &ty2)?;
+        d.backward(gpu(), p, 42, &tr, &tdx)
+    });
+    let y = download(&ty);
+    // 1/0.7 is not exact in f32: relative 1e-6.
+    assert_close("dropout forward", &y, &dropout_ref(&x, keep, 42), 1e-6, 1e-6);
+    let kept = y.iter().filter(|&&v| v != 0.0).count() as f64 / n as f64;
+    assert!((kept - keep).abs() < 0.07, "kept fraction {kept} for keep_prob {keep}");
+    assert_ne!(download(&ty2), y, "another seed must give another mask");
+    let want = fd_grad(&x, |x| dot(&r, &dropout_ref(x, keep, 42)));
+    assert_close("dropout backward", &download(&tdx), &want, 1e-6, 1e-5);
+    let bad = Dropout { keep_prob: 0.0 };
+    assert!(gpu().run(|p| bad.forward(gpu(), p, 1, &tx, &ty)).is_err());
+}
+
+#[test]
+fn add_forward_backward_and_accumulate() {
+    let shape = [2, 3, 5];
+    let n: usize = shape.iter().product();
+    let mut rng = Rng(6);
+    let (a, b) = (f32_round(&rng.vec(n, -1.0, 1.0)), f32_round(&rng.vec(n, -1.0, 1.0)));
+    let (ta, tb, ty) = (upload(&shape, &a), upload(&shape, &b), zeros(&shape));
+    run(|p| {
+        add::forward(gpu(), p, &ta, &tb, &ty)?;
+        // Accumulating twice checks that it adds rather than overwrites.
+        add::accumulate(gpu(), p, &ta, &tb)?;
+        add::accumulate(gpu(), p, &ta, &tb)
+    });
+    let sum: Vec<f64> = a.iter().zip(&b).map(|(x, y)| x + y).collect();
+    assert_close("add forward", &download(&ty), &sum, 1e-6, 1e-6);
+    let acc: Vec<f64> = a.iter().zip(&b).map(|(x, y)| 2.0 * x + y).collect();
+    assert_close("add accumulate", &download(&tb), &acc, 1e-6, 1e-6);
+    // The backward is the identity for both inputs (no kernel): check the maths it relies on.
+    let r = rng.vec(n, -1.0, 1.0);
+    let add_ref = |x: &[f64]| x.iter().zip(&b).map(|(p, q)| p + q).collect::<Vec<_>>();
+    assert_close("add backward", &r, &fd_grad(&a, |x| dot(&r, &add_ref(x))), 1e-8, 1e-6);
 }

@@ -6,7 +6,11 @@
 //! caller-allocated so a memory planner can place them; backward functions write (never
 //! accumulate into) their gradient outputs.
 
+pub mod add;
+pub mod dropout;
 pub mod elu;
+pub mod prelu;
+pub mod projection;
 pub mod reduce;
 pub mod sigmoid;
 

@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Proves the kernel tests can fail: applies each mutation in ci/mutants.txt (one per line:
+# shader file | sed expression | test target), runs that test, and reports any mutation
+# the tests did NOT catch. Restores every file. Not part of CI (it rebuilds per mutation).
+set -uo pipefail
+cd "$(dirname "$0")/.."
+source ci/lavapipe.sh
+survived=0
+while IFS='|' read -r file expr test; do
+    [[ -z "$file" || "$file" == \#* ]] && continue
+    file=$(echo "$file" | xargs); test=$(echo "$test" | xargs)
+    cp "$file" /tmp/mutant.bak
+    sed -i "$expr" "$file"
+    if cmp -s "$file" /tmp/mutant.bak; then
+        echo "NOT APPLIED  $file: $expr"; survived=1
+    elif cargo test -q --test "$test" >/dev/null 2>&1; then
+        echo "SURVIVED     $file: $expr ($test)"; survived=1
+    else
+        echo "caught       $file: $expr ($test)"
+    fi
+    cp /tmp/mutant.bak "$file"
+done < ci/mutants.txt
+exit $survived

@@ -1,0 +1,43 @@
+//! The projection unit's 1x1 conv over depth-folded channels: forward against the f64
+//! reference, and input, weight and bias gradients against finite differences.
+
+mod common;
+mod reference;
+use common::*;
+use reference::projection::projection as proj_ref;
+use rendernet::ops::projection;
+
+#[test]
+fn projection_forward_and_backward() {
+    // x [N, C, D, H, W] = [2, 3, 5, 4, 7] folds to K = 15; O = 6; S = 28.
+    let (n, c, d, h, w, o) = (2, 3, 5, 4, 7, 6);
+    let (k, s) = (c * d, h * w);
+    let mut rng = Rng(11);
+    let x = f32_round(&rng.vec(n * k * s, -1.0, 1.0));
+    let wt = f32_round(&rng.vec(o * k, -0.5, 0.5));
+    let b = f32_round(&rng.vec(o, -0.5, 0.5));
+    let r = f32_round(&rng.vec(n * o * s, -1.0, 1.0));
+    let xs = [n, c, d, h, w];
+    let (tx, tw, tb, ty) = (upload(&xs, &x), upload(&[o, k, 1, 1], &wt), upload(&[o], &b), zeros(&[n, o, h, w]));
+    let tr = upload(&[n, o, h, w], &r);
+    let (tdx, tdw, tdb) = (zeros(&xs), zeros(&[o, k, 1, 1]), zeros(&[o]));
+    run(|p| {
+        projection::forward(gpu(), p, &tx, &tw, &tb, &ty)?;
+        projection::backward_input(gpu(), p, &tr, &tw, &tdx)?;
+        projection::backward_weight(gpu(), p, &tx, &tr, &tdw)?;
+        projection::backward_bias(gpu(), p, &tr, &tdb)
+    });
+    // Sums of K = 15 (forward, dx: O = 6; dw, db: N*S = 56) terms of size <= 1.
+    assert_close("projection forward", &download(&ty), &proj_ref(&x, &wt, &b, n, k, o, s), 1e-5, 1e-4);
+    let l = |x: &[f64], w: &[f64], b: &[f64]| dot(&r, &proj_ref(x, w, b, n, k, o, s));
+    assert_close("projection backward input", &download(&tdx), &fd_grad(&x, |x| l(x, &wt, &b)), 1e-5, 1e-4);
+    assert_close("projection backward weight", &download(&tdw), &fd_grad(&wt, |w| l(&x, w, &b)), 1e-5, 1e-4);
+    assert_close("projection backward bias", &download(&tdb), &fd_grad(&b, |b| l(&x, &wt, b)), 1e-5, 1e-4);
+}
+
+#[test]
+fn projection_rejects_mismatched_weights() {
+    let (tx, tw, tb, ty) = (zeros(&[1, 2, 3, 4, 4]), zeros(&[5, 7, 1, 1]), zeros(&[5]), zeros(&[1, 5, 4, 4]));
+    let err = gpu().run(|p| projection::forward(gpu(), p, &tx, &tw, &tb, &ty)).unwrap_err();
+    assert!(err.to_string().contains("K = C*D = 6"), "{err}");
+}

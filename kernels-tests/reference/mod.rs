@@ -1,0 +1,7 @@
+//! Plain-Rust f64 references for every kernel: simple loops that read like the maths, the
+//! oracle the GPU kernels are tested against (forward directly, backward through finite
+//! differences of these forwards).
+#![allow(dead_code)]
+
+pub mod activations;
+pub mod projection;

@@ -1,0 +1,27 @@
+// Residual add. Forward y = a + b. Its backward is the identity (da = db = dy) and needs no
+// kernel; `add_accumulate` (acc += x) is what gradient accumulation uses where one tensor
+// feeds several nodes.
+
+struct Params { n: u32 }
+@group(0) @binding(0) var<uniform> p: Params;
+
+@group(0) @binding(1) var<storage, read> fa: array<f32>;
+@group(0) @binding(2) var<storage, read> fb: array<f32>;
+@group(0) @binding(3) var<storage, read_write> fy: array<f32>;
+
+@compute @workgroup_size(64)
+fn add_forward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    if (i >= p.n) { return; }
+    fy[i] = fa[i] + fb[i];
+}
+
+@group(0) @binding(1) var<storage, read> ax: array<f32>;
+@group(0) @binding(2) var<storage, read_write> acc: array<f32>;
+
+@compute @workgroup_size(64)
+fn add_accumulate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    if (i >= p.n) { return; }
+    acc[i] = acc[i] + ax[i];
+}

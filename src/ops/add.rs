@@ -1,0 +1,30 @@
+//! Residual add and gradient accumulation (binds `shaders/add.wgsl`).
+//!
+//! The backward of `y = a + b` is `da = db = dy`: no kernel, the executor hands `dy` on.
+
+use super::{elementwise, expect_shape};
+use crate::error::Result;
+use crate::gpu::{Arg, Gpu, Shader, Tensor};
+
+const SHADER: Shader = Shader { name: "add", source: include_str!("../../shaders/add.wgsl") };
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    n: u32,
+}
+
+/// `y = a + b`; all three of one shape.
+pub fn forward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, a: &Tensor, b: &Tensor, y: &Tensor) -> Result<()> {
+    expect_shape("add", "b", b, a.shape())?;
+    expect_shape("add", "output", y, a.shape())?;
+    let n = a.numel();
+    elementwise(gpu, pass, SHADER, "add_forward", &Params { n: n as u32 }, &[Arg::R(a), Arg::R(b), Arg::W(y)], n)
+}
+
+/// `acc += x`, for summing gradients where a tensor feeds several nodes.
+pub fn accumulate(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, acc: &Tensor) -> Result<()> {
+    expect_shape("add_accumulate", "accumulator", acc, x.shape())?;
+    let n = x.numel();
+    elementwise(gpu, pass, SHADER, "add_accumulate", &Params { n: n as u32 }, &[Arg::R(x), Arg::W(acc)], n)
+}

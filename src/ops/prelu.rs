@@ -1,0 +1,59 @@
+//! PReLU, one slope per channel (binds `shaders/prelu.wgsl`). Works on any rank >= 2
+//! tensor with channels on axis 1 (NCDHW in the 3D trunk, NCHW in the 2D part).
+
+use super::{expect_shape, reduce};
+use crate::error::{Result, shape_err};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
+
+const SHADER: Shader = Shader { name: "prelu", source: include_str!("../../shaders/prelu.wgsl") };
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    n: u32,
+    c: u32,
+    s: u32,
+}
+
+/// `[N, C, S]`: batch, channels, and the product of the spatial dimensions.
+fn dims(x: &Tensor, alpha: &Tensor) -> Result<[usize; 3]> {
+    let sh = x.shape();
+    if sh.len() < 2 {
+        return Err(shape_err("prelu", format!("input {sh:?} needs a channel axis (rank >= 2)")));
+    }
+    expect_shape("prelu", "alpha", alpha, &[sh[1]])?;
+    Ok([sh[0], sh[1], sh[2..].iter().product()])
+}
+
+fn params([n, c, s]: [usize; 3]) -> Params {
+    Params { n: (n * c * s) as u32, c: c as u32, s: s as u32 }
+}
+
+/// `y = x` where `x > 0`, else `alpha[c] * x`; `alpha` is `[C]`.
+pub fn forward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, alpha: &Tensor, y: &Tensor) -> Result<()> {
+    let d = dims(x, alpha)?;
+    expect_shape("prelu", "output", y, x.shape())?;
+    let args = [Arg::R(x), Arg::R(alpha), Arg::W(y)];
+    gpu.dispatch(pass, SHADER, "prelu_forward", &params(d), &args, grid_1d(x.numel() as u64, 64)?)
+}
+
+/// Gradients to the input (`dx`, shape of `x`) and to the slopes (`dalpha`, `[C]`).
+pub fn backward(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    x: &Tensor,
+    alpha: &Tensor,
+    dy: &Tensor,
+    dx: &Tensor,
+    dalpha: &Tensor,
+) -> Result<()> {
+    let d = dims(x, alpha)?;
+    for (name, t) in [("dy", dy), ("dx", dx)] {
+        expect_shape("prelu", name, t, x.shape())?;
+    }
+    expect_shape("prelu", "dalpha", dalpha, alpha.shape())?;
+    let contrib = Tensor::zeros(gpu, x.shape())?;
+    let args = [Arg::R(x), Arg::R(alpha), Arg::R(dy), Arg::W(dx), Arg::W(&contrib)];
+    gpu.dispatch(pass, SHADER, "prelu_backward", &params(d), &args, grid_1d(x.numel() as u64, 64)?)?;
+    reduce::sum_outer_inner(gpu, pass, &contrib, d, 1.0, dalpha)
+}
