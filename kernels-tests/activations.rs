@@ -129,6 +129,10 @@ fn dropout_mask_is_seeded_and_shared_by_backward() {
     assert_ne!(download(&ty2), y, "another seed must give another mask");
     let want = fd_grad(&x, |x| dot(&r, &dropout_ref(x, keep, 42)));
     assert_close("dropout backward", &download(&tdx), &want, 1e-6, 1e-5);
+    // keep_prob 1 (evaluation) is exactly the identity.
+    let all = Dropout { keep_prob: 1.0 };
+    run(|p| all.forward(gpu(), p, 42, &tx, &ty));
+    assert_close("dropout keep_prob 1", &download(&ty), &x, 0.0, 0.0);
     let bad = Dropout { keep_prob: 0.0 };
     assert!(gpu().run(|p| bad.forward(gpu(), p, 1, &tx, &ty)).is_err());
 }
@@ -139,13 +143,15 @@ fn add_forward_backward_and_accumulate() {
     let n: usize = shape.iter().product();
     let mut rng = Rng(6);
     let (a, b) = (f32_round(&rng.vec(n, -1.0, 1.0)), f32_round(&rng.vec(n, -1.0, 1.0)));
-    let (ta, tb, ty) = (upload(&shape, &a), upload(&shape, &b), zeros(&shape));
+    let (ta, tb, ty, tcopy) = (upload(&shape, &a), upload(&shape, &b), zeros(&shape), zeros(&shape));
     run(|p| {
         add::forward(gpu(), p, &ta, &tb, &ty)?;
         // Accumulating twice checks that it adds rather than overwrites.
         add::accumulate(gpu(), p, &ta, &tb)?;
-        add::accumulate(gpu(), p, &ta, &tb)
+        add::accumulate(gpu(), p, &ta, &tb)?;
+        add::copy(gpu(), p, &ta, &tcopy)
     });
+    assert_close("add copy", &download(&tcopy), &a, 0.0, 0.0);
     let sum: Vec<f64> = a.iter().zip(&b).map(|(x, y)| x + y).collect();
     assert_close("add forward", &download(&ty), &sum, 1e-6, 1e-6);
     let acc: Vec<f64> = a.iter().zip(&b).map(|(x, y)| 2.0 * x + y).collect();

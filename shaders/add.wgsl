@@ -1,6 +1,6 @@
 // Residual add. Forward y = a + b. Its backward is the identity (da = db = dy) and needs no
-// kernel; `add_accumulate` (acc += x) is what gradient accumulation uses where one tensor
-// feeds several nodes.
+// kernel of its own: the executor copies dy into each input's gradient (`add_copy`) or, where
+// one tensor feeds several nodes, sums into it (`add_accumulate`, acc += x).
 
 struct Params { n: u32 }
 @group(0) @binding(0) var<uniform> p: Params;
@@ -24,4 +24,11 @@ fn add_accumulate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wo
     let i = gid.x + gid.y * nwg.x * 64u;
     if (i >= p.n) { return; }
     acc[i] = acc[i] + ax[i];
+}
+
+@compute @workgroup_size(64)
+fn add_copy(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    if (i >= p.n) { return; }
+    acc[i] = ax[i];
 }

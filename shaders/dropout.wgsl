@@ -13,8 +13,9 @@ fn pcg(v: u32) -> u32 {
     return (word >> 22u) ^ word;
 }
 
+// threshold = 0xffffffff means keep_prob = 1 (evaluation): keep everything, exactly.
 fn keep(i: u32) -> bool {
-    return pcg(i ^ pcg(p.seed)) < p.threshold;
+    return p.threshold == 0xffffffffu || pcg(i ^ pcg(p.seed)) < p.threshold;
 }
 
 @group(0) @binding(1) var<storage, read> src: array<f32>;

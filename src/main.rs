@@ -21,6 +21,11 @@ enum Cmd {
 }
 
 fn main() -> ExitCode {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        // Mesa prints a warning per device open without it; any writable folder will do.
+        // SAFETY: single-threaded here, before any other thread (wgpu's) exists.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
+    }
     let cli = Cli::parse();
     let r = match cli.cmd {
         Cmd::Info => cli::info::run(),

@@ -25,6 +25,6 @@ pub fn dropout(x: &[f64], keep_prob: f64, seed: u32) -> Vec<f64> {
     let threshold = (keep_prob * 4294967296.0).min(u32::MAX as f64) as u32;
     x.iter()
         .enumerate()
-        .map(|(i, &v)| if pcg(i as u32 ^ pcg(seed)) < threshold { v / keep_prob } else { 0.0 })
+        .map(|(i, &v)| if threshold == u32::MAX || pcg(i as u32 ^ pcg(seed)) < threshold { v / keep_prob } else { 0.0 })
         .collect()
 }

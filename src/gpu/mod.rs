@@ -31,6 +31,7 @@ pub struct Gpu {
     /// Bound in place of an absent optional input (a conv without bias): wgpu forbids
     /// binding the same buffer as read and read-write in one dispatch, so aliasing is no option.
     dummy: wgpu::Buffer,
+    dispatches: std::sync::atomic::AtomicU64,
 }
 
 impl Gpu {
@@ -53,7 +54,13 @@ impl Gpu {
             pipelines: Mutex::new(HashMap::new()),
             modules: Mutex::new(HashMap::new()),
             dummy,
+            dispatches: Default::default(),
         })
+    }
+
+    /// Dispatches recorded since the device was opened (for per-step statistics).
+    pub fn dispatch_count(&self) -> u64 {
+        self.dispatches.load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// Whether GPU timestamps can be taken inside compute passes.

@@ -1,6 +1,7 @@
 //! Residual add and gradient accumulation (binds `shaders/add.wgsl`).
 //!
-//! The backward of `y = a + b` is `da = db = dy`: no kernel, the executor hands `dy` on.
+//! The backward of `y = a + b` is `da = db = dy`: the executor [`copy`]s or [`accumulate`]s
+//! `dy` into each input's gradient.
 
 use super::{elementwise, expect_shape};
 use crate::error::Result;
@@ -27,4 +28,11 @@ pub fn accumulate(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, acc: 
     expect_shape("add_accumulate", "accumulator", acc, x.shape())?;
     let n = x.numel();
     elementwise(gpu, pass, SHADER, "add_accumulate", &Params { n: n as u32 }, &[Arg::R(x), Arg::W(acc)], n)
+}
+
+/// `dst = src` (a gradient handed on unchanged, as through a residual add).
+pub fn copy(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, src: &Tensor, dst: &Tensor) -> Result<()> {
+    expect_shape("add_copy", "destination", dst, src.shape())?;
+    let n = src.numel();
+    elementwise(gpu, pass, SHADER, "add_copy", &Params { n: n as u32 }, &[Arg::R(src), Arg::W(dst)], n)
 }

@@ -29,8 +29,8 @@ impl Dropout {
         if !(self.keep_prob > 0.0 && self.keep_prob <= 1.0) {
             return Err(Error::Invalid(format!("dropout keep_prob {} must be in (0, 1]", self.keep_prob)));
         }
-        // keep_prob = 1 keeps everything: the threshold saturates at u32::MAX, and the
-        // one hash value equal to it (probability 2^-32) is the only loss.
+        // keep_prob = 1 saturates the threshold at u32::MAX, which the kernel reads as
+        // "keep all" (evaluation mode runs the same graph with keep_prob 1).
         let threshold = (self.keep_prob as f64 * 4294967296.0).min(u32::MAX as f64) as u32;
         Ok(Params { n: n as u32, seed, threshold, scale: 1.0 / self.keep_prob })
     }

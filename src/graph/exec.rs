@@ -1,0 +1,381 @@
+//! Running a graph: forward, backward and optimizer update recorded into one encoder and
+//! submitted once, with buffers planned from tensor lifetimes.
+//!
+//! Memory plan: the schedule is the forward nodes in order, then their backward rules in
+//! reverse. Every value's last reader in that schedule is known before recording, so its
+//! buffer returns to the pool right after and a later tensor of the same size reuses it
+//! (safe within one encoder: the queue runs commands in order). Forward activations are
+//! kept only if some backward rule reads them. Inputs, parameters, optimizer state, values
+//! the caller asked to [`Executor::keep`], and the gradients it asked for persist.
+
+use super::op::Ctx;
+use super::{Graph, Kind, Value};
+use crate::error::{Error, Result};
+use crate::gpu::{BufferPool, Gpu, Tensor};
+use crate::ops;
+
+/// What one run recorded and allocated.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct StepStats {
+    /// Compute dispatches recorded.
+    pub dispatches: u64,
+    /// Queue submits (1 for a whole training step).
+    pub submits: u64,
+    /// Bytes the memory planner's pool has allocated: its peak.
+    pub peak_bytes: u64,
+    /// Bytes all forward values and gradients would take without reuse.
+    pub tensor_bytes: u64,
+}
+
+/// Owns the GPU tensors of one graph and runs it.
+pub struct Executor {
+    graph: Graph,
+    values: Vec<Option<Tensor>>,
+    grads: Vec<Option<Tensor>>,
+    keep: Vec<bool>,
+    grad_wanted: Vec<bool>,
+    pool: BufferPool,
+    /// Dropout active (training) or identity (evaluation).
+    pub training: bool,
+    /// Optimizer steps taken; also seeds dropout so a resumed run repeats its masks.
+    pub step: u64,
+    pub(crate) seed: u64,
+    pub(crate) adam_state: Vec<Option<(Tensor, Tensor)>>,
+    loss_one: Option<Tensor>,
+}
+
+fn bytes(shape: &[usize]) -> u64 {
+    shape.iter().product::<usize>() as u64 * 4
+}
+
+impl Executor {
+    /// Allocates inputs (zeroed) and parameters (initialised from `seed`).
+    pub fn new(gpu: &Gpu, graph: Graph, seed: u64) -> Result<Executor> {
+        let n = graph.values.len();
+        let mut values = vec![None; n];
+        for (i, v) in graph.values.iter().enumerate() {
+            values[i] = match &v.kind {
+                Kind::Input => Some(Tensor::zeros(gpu, &v.shape)?),
+                Kind::Param(init) => Some(Tensor::from_slice(gpu, &v.shape, &init.values(&v.shape, seed, i as u64))?),
+                Kind::Node => None,
+            };
+        }
+        let grad_wanted = graph.values.iter().map(|v| matches!(v.kind, Kind::Param(_))).collect();
+        Ok(Executor {
+            values,
+            grads: vec![None; n],
+            keep: vec![false; n],
+            grad_wanted,
+            pool: BufferPool::new(),
+            training: true,
+            step: 0,
+            seed,
+            adam_state: vec![None; n],
+            loss_one: None,
+            graph,
+        })
+    }
+
+    /// The graph being run.
+    pub fn graph(&self) -> &Graph {
+        &self.graph
+    }
+
+    /// Sets an input's (or a parameter's) contents. Rejects wrong lengths and NaN/Inf.
+    pub fn feed(&self, gpu: &Gpu, v: Value, data: &[f32]) -> Result<()> {
+        let info = self.graph.info(v);
+        if matches!(info.kind, Kind::Node) {
+            return Err(Error::Invalid(format!("'{}' is computed by the graph and cannot be fed", info.name)));
+        }
+        if let Some(i) = data.iter().position(|x| !x.is_finite()) {
+            return Err(Error::Invalid(format!("'{}': value {i} is {} (NaN/Inf are not accepted)", info.name, data[i])));
+        }
+        let t = self.values[v.0].as_ref().expect("inputs and params are always allocated");
+        t.write(gpu, data).map_err(|e| Error::Invalid(format!("'{}': {e}", info.name)))
+    }
+
+    /// Keeps a node's output after a run so [`Executor::read`] can return it.
+    pub fn keep(&mut self, v: Value) {
+        self.keep[v.0] = true;
+    }
+
+    /// Asks for the gradient of an input (voxels, pose, light, latent code...). Parameters
+    /// always get one when training.
+    pub fn want_grad(&mut self, v: Value) {
+        self.grad_wanted[v.0] = true;
+    }
+
+    /// Reads a value: an input, a parameter, or a node output marked with `keep`.
+    pub fn read(&self, gpu: &Gpu, v: Value) -> Result<Vec<f32>> {
+        let name = &self.graph.info(v).name;
+        let t = self.values[v.0]
+            .as_ref()
+            .ok_or_else(|| Error::Invalid(format!("'{name}' was not kept; call keep() before running")))?;
+        t.to_vec(gpu)
+    }
+
+    /// Reads the gradient of a parameter or a `want_grad` input after a backward run.
+    pub fn grad(&self, gpu: &Gpu, v: Value) -> Result<Vec<f32>> {
+        let name = &self.graph.info(v).name;
+        let t = self.grads[v.0]
+            .as_ref()
+            .ok_or_else(|| Error::Invalid(format!("no gradient for '{name}': run backward, and want_grad() it")))?;
+        t.to_vec(gpu)
+    }
+
+    pub(crate) fn tensor(&self, v: Value) -> Option<&Tensor> {
+        self.values[v.0].as_ref()
+    }
+
+    /// Runs the forward pass only (one submit).
+    pub fn forward(&mut self, gpu: &Gpu) -> Result<StepStats> {
+        self.run(gpu, None, None)
+    }
+
+    /// Runs forward and backward from the scalar `loss` (one submit); gradients of
+    /// parameters and `want_grad` inputs are then readable with [`Executor::grad`].
+    pub fn backward(&mut self, gpu: &Gpu, loss: Value) -> Result<StepStats> {
+        self.run(gpu, Some(loss), None)
+    }
+
+    /// One training step: forward, backward from `loss`, and an Adam update of every
+    /// parameter at learning rate `adam.lr`, all in one submit.
+    pub fn train_step(&mut self, gpu: &Gpu, loss: Value, adam: &ops::adam::Adam) -> Result<StepStats> {
+        self.run(gpu, Some(loss), Some(adam))
+    }
+
+    fn persistent(&self, v: Value) -> bool {
+        !matches!(self.graph.values[v.0].kind, Kind::Node) || self.keep[v.0]
+    }
+
+    /// Which nodes run backward: those on a path from a value wanting a gradient to `loss`.
+    fn backward_nodes(&self, loss: Value) -> Vec<bool> {
+        let nodes = &self.graph.nodes;
+        let mut needs = self.grad_wanted.clone(); // value depends on something wanting grad
+        for n in nodes {
+            if n.inputs.iter().any(|i| needs[i.0]) {
+                needs[n.output.0] = true;
+            }
+        }
+        let mut reaches = vec![false; self.graph.values.len()]; // value influences the loss
+        reaches[loss.0] = true;
+        let mut run = vec![false; nodes.len()];
+        for (k, n) in nodes.iter().enumerate().rev() {
+            if reaches[n.output.0] && needs[n.output.0] {
+                run[k] = true;
+                for i in &n.inputs {
+                    reaches[i.0] = true;
+                }
+            }
+        }
+        run
+    }
+
+    fn run(&mut self, gpu: &Gpu, loss: Option<Value>, adam: Option<&ops::adam::Adam>) -> Result<StepStats> {
+        if let Some(l) = loss {
+            if self.graph.info(l).shape != [1] {
+                return Err(Error::Invalid(format!(
+                    "backward needs a scalar loss; '{}' has shape {:?}",
+                    self.graph.info(l).name,
+                    self.graph.info(l).shape
+                )));
+            }
+        }
+        let nodes = self.graph.nodes.clone();
+        let f = nodes.len();
+        let bw = loss.map(|l| self.backward_nodes(l)).unwrap_or_else(|| vec![false; f]);
+        // Last schedule position reading each value (forward at k, backward of k at 2f-1-k).
+        let nv = self.graph.values.len();
+        let mut last = vec![0usize; nv];
+        let mut last_grad = vec![0usize; nv];
+        for (k, n) in nodes.iter().enumerate() {
+            for i in &n.inputs {
+                last[i.0] = last[i.0].max(k);
+            }
+            last[n.output.0] = last[n.output.0].max(k);
+            if bw[k] {
+                let pos = 2 * f - 1 - k;
+                let (ins, out) = n.op.saves();
+                for &j in ins {
+                    last[n.inputs[j].0] = pos;
+                }
+                if out {
+                    last[n.output.0] = pos;
+                }
+                last_grad[n.output.0] = pos;
+            }
+        }
+        // Free what the previous run kept for reading: it has been read or never will be.
+        for v in 0..nv {
+            if matches!(self.graph.values[v].kind, Kind::Node) {
+                if let Some(t) = self.values[v].take() {
+                    self.pool.release(t);
+                }
+            }
+            if !self.grad_wanted[v] {
+                if let Some(t) = self.grads[v].take() {
+                    self.pool.release(t);
+                }
+            }
+        }
+        let d0 = gpu.dispatch_count();
+        let tensor_bytes;
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            tensor_bytes = self.record(gpu, &mut pass, &nodes, &bw, loss, &last, &last_grad)?;
+            if let Some(adam) = adam {
+                self.record_adam(gpu, &mut pass, adam)?;
+            }
+        }
+        gpu.submit_and_wait(enc)?;
+        if adam.is_some() {
+            self.step += 1;
+        }
+        Ok(StepStats { dispatches: gpu.dispatch_count() - d0, submits: 1, peak_bytes: self.pool.allocated_bytes(), tensor_bytes })
+    }
+
+    /// Adam on every parameter that received a gradient; moments are created (zeroed) on
+    /// first use and kept for checkpoints.
+    fn record_adam(&mut self, gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, adam: &ops::adam::Adam) -> Result<()> {
+        let t = u32::try_from(self.step + 1).map_err(|_| Error::Invalid("optimizer step beyond u32".into()))?;
+        for v in self.graph.params() {
+            let Some(g) = self.grads[v.0].as_ref() else { continue };
+            let shape = &self.graph.values[v.0].shape;
+            if self.adam_state[v.0].is_none() {
+                self.adam_state[v.0] = Some((Tensor::zeros(gpu, shape)?, Tensor::zeros(gpu, shape)?));
+            }
+            let (m, s) = self.adam_state[v.0].as_ref().expect("just set");
+            let p = self.values[v.0].as_ref().expect("params are always allocated");
+            adam.step(gpu, pass, t, p, g, m, s)?;
+        }
+        Ok(())
+    }
+
+    fn release_if_dead(&mut self, v: Value, pos: usize, last: &[usize]) {
+        if last[v.0] == pos && !self.persistent(v) {
+            if let Some(t) = self.values[v.0].take() {
+                self.pool.release(t);
+            }
+        }
+    }
+
+    /// Records forward and (with a loss) backward; returns the bytes of every tensor it
+    /// placed, the figure the pool's peak is compared with.
+    #[allow(clippy::too_many_arguments)]
+    fn record(
+        &mut self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        nodes: &[super::Node],
+        bw: &[bool],
+        loss: Option<Value>,
+        last: &[usize],
+        last_grad: &[usize],
+    ) -> Result<u64> {
+        let f = nodes.len();
+        let mut total = 0u64;
+        for (k, n) in nodes.iter().enumerate() {
+            let shape = self.graph.values[n.output.0].shape.clone();
+            let y = self.pool.tensor(gpu, &shape)?;
+            total += bytes(&shape);
+            {
+                let ins: Vec<&Tensor> = n.inputs.iter().map(|i| self.values[i.0].as_ref().expect("scheduled")).collect();
+                let mut ctx = Ctx { gpu, pass: &mut *pass, seed: self.node_seed(k), training: self.training };
+                n.op.forward(&mut ctx, &ins, &y).map_err(|e| node_err(&n.name, e))?;
+            }
+            self.values[n.output.0] = Some(y);
+            for v in n.inputs.iter().chain([&n.output]) {
+                self.release_if_dead(*v, k, last);
+            }
+        }
+        let Some(loss) = loss else { return Ok(total) };
+        let seed = self.loss_seed(gpu)?;
+        let g = self.pool.tensor(gpu, &[1])?;
+        ops::add::copy(gpu, pass, &seed, &g)?;
+        self.grads[loss.0] = Some(g);
+        let produced_by_bw: Vec<bool> = {
+            let mut p = vec![false; self.graph.values.len()];
+            for (k, n) in nodes.iter().enumerate() {
+                p[n.output.0] = bw[k];
+            }
+            p
+        };
+        for k in (0..f).rev().filter(|&k| bw[k]) {
+            let pos = 2 * f - 1 - k;
+            let n = &nodes[k];
+            let Some(dy) = self.grads[n.output.0].clone() else { continue };
+            // Each input wanting a gradient gets its own tensor on first contribution;
+            // later contributions go to a temporary and are summed in.
+            let mut targets: Vec<Option<(Tensor, bool)>> = Vec::new(); // (tensor, accumulate)
+            for (j, i) in n.inputs.iter().enumerate() {
+                if !(self.grad_wanted[i.0] || produced_by_bw[i.0]) {
+                    targets.push(None);
+                    continue;
+                }
+                let seen = self.grads[i.0].is_some() || n.inputs[..j].contains(i);
+                let shape = self.graph.values[i.0].shape.clone();
+                let t = self.pool.tensor(gpu, &shape)?;
+                if !seen {
+                    total += bytes(&shape);
+                    self.grads[i.0] = Some(t.clone());
+                }
+                targets.push(Some((t, seen)));
+            }
+            if matches!(n.op, super::Op::Add) {
+                for t in targets.iter().flatten() {
+                    ops::add::copy(gpu, pass, &dy, &t.0)?;
+                }
+            } else {
+                let ins: Vec<&Tensor> = n.inputs.iter().map(|i| self.values[i.0].as_ref()).map(|t| t.unwrap_or(&dy)).collect();
+                let y = self.values[n.output.0].clone().unwrap_or_else(|| dy.clone());
+                let dx: Vec<Option<&Tensor>> = targets.iter().map(|t| t.as_ref().map(|t| &t.0)).collect();
+                let mut ctx = Ctx { gpu, pass: &mut *pass, seed: self.node_seed(k), training: self.training };
+                n.op.backward(&mut ctx, &ins, &y, &dy, &dx).map_err(|e| node_err(&n.name, e))?;
+            }
+            for (j, t) in targets.into_iter().enumerate() {
+                if let Some((t, true)) = t {
+                    let acc = self.grads[n.inputs[j].0].as_ref().expect("first contribution made it");
+                    ops::add::accumulate(gpu, pass, &t, acc)?;
+                    self.pool.release(t);
+                }
+            }
+            if last_grad[n.output.0] == pos && !self.grad_wanted[n.output.0] {
+                if let Some(t) = self.grads[n.output.0].take() {
+                    self.pool.release(t);
+                }
+            }
+            for v in n.inputs.iter().chain([&n.output]) {
+                self.release_if_dead(*v, pos, last);
+            }
+        }
+        Ok(total)
+    }
+
+    /// A constant 1 to start backward from, in a buffer of its own (never pooled, since
+    /// it is written with `queue.write_buffer`).
+    fn loss_seed(&mut self, gpu: &Gpu) -> Result<Tensor> {
+        if self.loss_one.is_none() {
+            self.loss_one = Some(Tensor::from_slice(gpu, &[1], &[1.0])?);
+        }
+        Ok(self.loss_one.clone().expect("just set"))
+    }
+
+    /// Dropout seed of node `k` at the current step: a pure function of (seed, step, node),
+    /// so a resumed run draws the same masks as an uninterrupted one.
+    fn node_seed(&self, k: usize) -> u32 {
+        if !self.training {
+            return 0;
+        }
+        let mut z = self.seed ^ self.step.wrapping_mul(0x9E3779B97F4A7C15) ^ (k as u64).wrapping_mul(0xBF58476D1CE4E5B9);
+        z = (z ^ (z >> 31)).wrapping_mul(0x94D049BB133111EB);
+        (z ^ (z >> 29)) as u32
+    }
+}
+
+fn node_err(node: &str, e: Error) -> Error {
+    match e {
+        Error::Shape { op, msg } => Error::Shape { op: format!("node '{node}' ({op})"), msg },
+        other => other,
+    }
+}

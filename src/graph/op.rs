@@ -1,0 +1,159 @@
+//! The ops a graph can hold, each with its shape rule, its forward, and its backward rule
+//! (which saved values it reads and which gradients it writes). Inputs are positional:
+//!
+//! | op | inputs | saved for backward |
+//! |---|---|---|
+//! | `Sigmoid` | x | output |
+//! | `Elu` | x | x |
+//! | `Prelu` | x, alpha[C] | x, alpha |
+//! | `Dropout` | x | nothing (the mask is a function of the seed) |
+//! | `Add` | a, b | nothing |
+//! | `Projection` | x[N,C,D,H,W], w[O,C*D,1,1], b[O] | x, w |
+
+use crate::error::{Result, shape_err};
+use crate::gpu::{Gpu, Tensor};
+use crate::ops::{self, dropout::Dropout};
+
+/// An op in a graph, with its configuration.
+#[derive(Clone, Debug)]
+pub enum Op {
+    /// Logistic sigmoid.
+    Sigmoid,
+    /// ELU with the given alpha.
+    Elu(f32),
+    /// PReLU with per-channel slopes (second input).
+    Prelu,
+    /// Inverted dropout with this keep probability while training; identity in evaluation.
+    Dropout(f32),
+    /// Elementwise sum of two equal-shaped values (residual connections).
+    Add,
+    /// Projection unit: fold depth into channels, 1x1 conv with bias.
+    Projection,
+}
+
+/// What a node's forward or backward gets to work with.
+pub(crate) struct Ctx<'a, 'p> {
+    pub gpu: &'a Gpu,
+    pub pass: &'a mut wgpu::ComputePass<'p>,
+    /// Dropout seed for this node and step; 0 when not training.
+    pub seed: u32,
+    pub training: bool,
+}
+
+impl Op {
+    /// A short name for messages.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Op::Sigmoid => "sigmoid",
+            Op::Elu(_) => "elu",
+            Op::Prelu => "prelu",
+            Op::Dropout(_) => "dropout",
+            Op::Add => "add",
+            Op::Projection => "projection",
+        }
+    }
+
+    fn arity(&self) -> usize {
+        match self {
+            Op::Sigmoid | Op::Elu(_) | Op::Dropout(_) => 1,
+            Op::Prelu | Op::Add => 2,
+            Op::Projection => 3,
+        }
+    }
+
+    /// The output shape for these input shapes, or why they do not fit.
+    pub(crate) fn infer(&self, s: &[&[usize]]) -> Result<Vec<usize>> {
+        if s.len() != self.arity() {
+            return Err(shape_err(self.name(), format!("takes {} inputs, got {}", self.arity(), s.len())));
+        }
+        match self {
+            Op::Sigmoid | Op::Elu(_) | Op::Dropout(_) => Ok(s[0].to_vec()),
+            Op::Prelu => {
+                if s[0].len() < 2 || s[1] != [s[0][1]] {
+                    return Err(shape_err("prelu", format!("alpha must be [C] = [{}]", s[0].get(1).unwrap_or(&0))));
+                }
+                Ok(s[0].to_vec())
+            }
+            Op::Add => {
+                if s[0] != s[1] {
+                    return Err(shape_err("add", "both inputs must have one shape"));
+                }
+                Ok(s[0].to_vec())
+            }
+            Op::Projection => {
+                let d = ops::projection::ProjectionDims::new(s[0], s[1])?;
+                if s[2] != [d.o] {
+                    return Err(shape_err("projection", format!("bias must be [{}]", d.o)));
+                }
+                Ok(d.output_shape())
+            }
+        }
+    }
+
+    /// Which inputs (by position) and whether the output must be kept for backward.
+    pub(crate) fn saves(&self) -> (&'static [usize], bool) {
+        match self {
+            Op::Sigmoid => (&[], true),
+            Op::Elu(_) => (&[0], false),
+            Op::Prelu => (&[0, 1], false),
+            Op::Dropout(_) | Op::Add => (&[], false),
+            Op::Projection => (&[0, 1], false),
+        }
+    }
+
+    fn dropout(&self, training: bool) -> Dropout {
+        match self {
+            Op::Dropout(k) if training => Dropout { keep_prob: *k },
+            _ => Dropout { keep_prob: 1.0 },
+        }
+    }
+
+    /// Records the forward of this op.
+    pub(crate) fn forward(&self, c: &mut Ctx, x: &[&Tensor], y: &Tensor) -> Result<()> {
+        let (g, p) = (c.gpu, &mut *c.pass);
+        match self {
+            Op::Sigmoid => ops::sigmoid::forward(g, p, x[0], y),
+            Op::Elu(a) => ops::elu::forward(g, p, *a, x[0], y),
+            Op::Prelu => ops::prelu::forward(g, p, x[0], x[1], y),
+            Op::Dropout(_) => self.dropout(c.training).forward(g, p, c.seed, x[0], y),
+            Op::Add => ops::add::forward(g, p, x[0], x[1], y),
+            Op::Projection => ops::projection::forward(g, p, x[0], x[1], x[2], y),
+        }
+    }
+
+    /// Records the backward of this op: writes the gradient of every input whose slot in
+    /// `dx` is `Some`. `x` holds the inputs (those not saved are absent only if unused).
+    pub(crate) fn backward(
+        &self,
+        c: &mut Ctx,
+        x: &[&Tensor],
+        y: &Tensor,
+        dy: &Tensor,
+        dx: &[Option<&Tensor>],
+    ) -> Result<()> {
+        let (g, p) = (c.gpu, &mut *c.pass);
+        match self {
+            Op::Sigmoid => some(dx[0], |d| ops::sigmoid::backward(g, p, y, dy, d)),
+            Op::Elu(a) => some(dx[0], |d| ops::elu::backward(g, p, *a, x[0], dy, d)),
+            Op::Prelu => {
+                // The kernel writes both gradients; a scratch takes the one nobody asked for.
+                let tmp_x;
+                let tmp_a;
+                let d_x = match dx[0] { Some(t) => t, None => { tmp_x = Tensor::zeros(g, x[0].shape())?; &tmp_x } };
+                let d_a = match dx[1] { Some(t) => t, None => { tmp_a = Tensor::zeros(g, x[1].shape())?; &tmp_a } };
+                ops::prelu::backward(g, p, x[0], x[1], dy, d_x, d_a)
+            }
+            Op::Dropout(_) => some(dx[0], |d| self.dropout(c.training).backward(g, p, c.seed, dy, d)),
+            Op::Add => unreachable!("the executor passes add's gradient through without a kernel"),
+            Op::Projection => {
+                some(dx[0], |d| ops::projection::backward_input(g, p, dy, x[1], d))?;
+                some(dx[1], |d| ops::projection::backward_weight(g, p, x[0], dy, d))?;
+                some(dx[2], |d| ops::projection::backward_bias(g, p, dy, d))
+            }
+        }
+    }
+}
+
+fn some(t: Option<&Tensor>, f: impl FnOnce(&Tensor) -> Result<()>) -> Result<()> {
+    t.map_or(Ok(()), f)
+}

@@ -1,0 +1,211 @@
+//! Parameter initialisation and safetensors I/O: weights files (parameters only, PyTorch
+//! layouts and the graph's value names) and checkpoints (parameters, Adam moments under
+//! `adam.m.<name>` / `adam.v.<name>`, and the step in the metadata). Files are written
+//! atomically: a temporary file in the same folder, fsync, rename, so a crash leaves either
+//! the old file or the new one, never a torn one.
+
+use super::exec::Executor;
+use super::Kind;
+use crate::error::{Error, Result};
+use crate::gpu::{Gpu, Tensor};
+use safetensors::{Dtype, SafeTensors, tensor::TensorView};
+use std::collections::{BTreeMap, HashMap};
+use std::io::Write;
+use std::path::Path;
+
+/// How a parameter starts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Init {
+    /// Glorot/Xavier uniform, as the original code: U(±sqrt(6 / (fan_in + fan_out))) with
+    /// fans from an OI... or IO... weight shape (symmetric, so transposed layouts agree).
+    Xavier,
+    /// He/Kaiming uniform for ReLU-like layers: U(±sqrt(6 / fan_in)).
+    He,
+    /// Every element this value (biases 0.001 and PReLU slopes 0 in the original code).
+    Constant(f32),
+}
+
+impl Init {
+    /// Initial values for `shape`, a pure function of (seed, salt).
+    pub fn values(&self, shape: &[usize], seed: u64, salt: u64) -> Vec<f32> {
+        let n: usize = shape.iter().product();
+        let receptive: usize = shape.iter().skip(2).product();
+        let fan_out = shape[0] * receptive;
+        let fan_in = shape.get(1).copied().unwrap_or(1) * receptive;
+        let limit = match self {
+            Init::Constant(c) => return vec![*c; n],
+            Init::Xavier => (6.0 / (fan_in + fan_out) as f64).sqrt(),
+            Init::He => (6.0 / fan_in as f64).sqrt(),
+        };
+        let mut state = seed ^ salt.wrapping_mul(0xD1B54A32D192ED03);
+        (0..n)
+            .map(|_| {
+                state = state.wrapping_add(0x9E3779B97F4A7C15);
+                let mut z = state;
+                z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+                z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+                let u = ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64;
+                ((2.0 * u - 1.0) * limit) as f32
+            })
+            .collect()
+    }
+}
+
+/// A named f32 tensor read from or written to a file.
+pub type Named = (String, Vec<usize>, Vec<f32>);
+
+/// Writes tensors and metadata to `path` atomically.
+pub fn save_safetensors(path: &Path, tensors: &[Named], metadata: HashMap<String, String>) -> Result<()> {
+    let io = |e: std::io::Error| Error::Io { path: path.display().to_string(), source: e };
+    let bytes: Vec<Vec<u8>> = tensors.iter().map(|t| bytemuck::cast_slice(&t.2).to_vec()).collect();
+    let views = tensors
+        .iter()
+        .zip(&bytes)
+        .map(|(t, b)| TensorView::new(Dtype::F32, t.1.clone(), b).map(|v| (t.0.clone(), v)))
+        .collect::<std::result::Result<Vec<_>, _>>()
+        .map_err(|e| Error::Invalid(format!("{}: {e}", path.display())))?;
+    let meta = if metadata.is_empty() { None } else { Some(metadata) };
+    let data = safetensors::serialize(views, meta).map_err(|e| Error::Invalid(format!("{}: {e}", path.display())))?;
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let tmp = dir.join(format!(".{}.tmp", path.file_name().and_then(|n| n.to_str()).unwrap_or("out")));
+    {
+        let mut f = std::fs::File::create(&tmp).map_err(io)?;
+        f.write_all(&data).map_err(io)?;
+        f.sync_all().map_err(io)?;
+    }
+    std::fs::rename(&tmp, path).map_err(io)?;
+    // Make the rename itself durable.
+    if let Ok(d) = std::fs::File::open(dir) {
+        let _ = d.sync_all();
+    }
+    Ok(())
+}
+
+/// Reads every tensor of a safetensors file as f32 (other dtypes are an error naming the
+/// tensor), with the file's metadata.
+pub fn load_safetensors(path: &Path) -> Result<(BTreeMap<String, (Vec<usize>, Vec<f32>)>, HashMap<String, String>)> {
+    let p = path.display().to_string();
+    let data = std::fs::read(path).map_err(|e| Error::Io { path: p.clone(), source: e })?;
+    let st = SafeTensors::deserialize(&data).map_err(|e| Error::Invalid(format!("{p}: not a valid safetensors file: {e}")))?;
+    let (_, meta) = SafeTensors::read_metadata(&data).map_err(|e| Error::Invalid(format!("{p}: {e}")))?;
+    let mut out = BTreeMap::new();
+    for (name, view) in st.tensors() {
+        if view.dtype() != Dtype::F32 {
+            return Err(Error::Invalid(format!("{p}: tensor '{name}' is {:?}, expected F32", view.dtype())));
+        }
+        let vals: Vec<f32> = view.data().chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+        if let Some(i) = vals.iter().position(|v| !v.is_finite()) {
+            return Err(Error::Invalid(format!("{p}: tensor '{name}' holds {} at index {i}", vals[i])));
+        }
+        out.insert(name, (view.shape().to_vec(), vals));
+    }
+    Ok((out, meta.metadata().clone().unwrap_or_default()))
+}
+
+impl Executor {
+    fn param_tensors(&self, gpu: &Gpu) -> Result<Vec<Named>> {
+        self.graph()
+            .params()
+            .into_iter()
+            .map(|v| {
+                let info = self.graph().info(v);
+                Ok((info.name.clone(), info.shape.clone(), self.read(gpu, v)?))
+            })
+            .collect()
+    }
+
+    /// Saves the parameters (the shippable weights) to `path`.
+    pub fn save_params(&self, gpu: &Gpu, path: &Path) -> Result<()> {
+        save_safetensors(path, &self.param_tensors(gpu)?, HashMap::new())
+    }
+
+    /// Loads parameters from `path`. Every parameter must be present with its shape; all
+    /// missing, unexpected and mis-shaped names are reported together.
+    pub fn load_params(&mut self, gpu: &Gpu, path: &Path) -> Result<()> {
+        let (mut file, _) = load_safetensors(path)?;
+        self.take_params(gpu, path, &mut file, true)
+    }
+
+    fn take_params(&mut self, gpu: &Gpu, path: &Path, file: &mut BTreeMap<String, (Vec<usize>, Vec<f32>)>, exact: bool) -> Result<()> {
+        let mut problems = Vec::new();
+        let mut ok = Vec::new();
+        for v in self.graph().params() {
+            let info = self.graph().info(v);
+            match file.remove(&info.name) {
+                None => problems.push(format!("missing '{}' {:?}", info.name, info.shape)),
+                Some((shape, _)) if shape != info.shape => {
+                    problems.push(format!("'{}' has shape {shape:?}, the model needs {:?}", info.name, info.shape))
+                }
+                Some((_, vals)) => ok.push((v, vals)),
+            }
+        }
+        if exact {
+            problems.extend(file.keys().map(|k| format!("unexpected '{k}'")));
+        }
+        if !problems.is_empty() {
+            return Err(Error::Invalid(format!("{}: does not match the model: {}", path.display(), problems.join("; "))));
+        }
+        for (v, vals) in ok {
+            self.feed(gpu, v, &vals)?;
+        }
+        Ok(())
+    }
+
+    /// Saves parameters, Adam moments, the step and the seed to `path`, atomically.
+    pub fn save_checkpoint(&self, gpu: &Gpu, path: &Path) -> Result<()> {
+        let mut tensors = self.param_tensors(gpu)?;
+        for v in self.graph().params() {
+            if let Some((m, s)) = &self.adam_state[v.0] {
+                let info = self.graph().info(v);
+                tensors.push((format!("adam.m.{}", info.name), info.shape.clone(), m.to_vec(gpu)?));
+                tensors.push((format!("adam.v.{}", info.name), info.shape.clone(), s.to_vec(gpu)?));
+            }
+        }
+        let meta = HashMap::from([("step".to_string(), self.step.to_string()), ("seed".to_string(), self.seed.to_string())]);
+        save_safetensors(path, &tensors, meta)
+    }
+
+    /// Restores a checkpoint written by [`Executor::save_checkpoint`] for this graph, so that
+    /// training continues exactly as if it had not stopped.
+    pub fn load_checkpoint(&mut self, gpu: &Gpu, path: &Path) -> Result<()> {
+        let (mut file, meta) = load_safetensors(path)?;
+        let field = |k: &str| -> Result<u64> {
+            meta.get(k)
+                .and_then(|s| s.parse().ok())
+                .ok_or_else(|| Error::Invalid(format!("{}: checkpoint metadata lacks a numeric '{k}'", path.display())))
+        };
+        let (step, seed) = (field("step")?, field("seed")?);
+        let mut moments = BTreeMap::new();
+        file.retain(|k, v| {
+            if k.starts_with("adam.") {
+                moments.insert(k.clone(), v.clone());
+                false
+            } else {
+                true
+            }
+        });
+        self.take_params(gpu, path, &mut file, true)?;
+        for v in self.graph().params() {
+            let info = self.graph().info(v).clone();
+            let (m, s) = (moments.remove(&format!("adam.m.{}", info.name)), moments.remove(&format!("adam.v.{}", info.name)));
+            self.adam_state[v.0] = match (m, s) {
+                (Some((ms, m)), Some((vs, s))) if ms == info.shape && vs == info.shape => {
+                    Some((Tensor::from_slice(gpu, &ms, &m)?, Tensor::from_slice(gpu, &vs, &s)?))
+                }
+                (None, None) => None,
+                _ => return Err(Error::Invalid(format!("{}: Adam moments of '{}' are incomplete or mis-shaped", path.display(), info.name))),
+            };
+        }
+        if let Some(k) = moments.keys().next() {
+            return Err(Error::Invalid(format!("{}: unexpected '{k}'", path.display())));
+        }
+        self.step = step;
+        self.seed = seed;
+        Ok(())
+    }
+}
+
+/// Whether a value kind is a parameter (for callers walking a graph).
+pub fn is_param(k: &Kind) -> bool {
+    matches!(k, Kind::Param(_))
+}
