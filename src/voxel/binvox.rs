@@ -94,6 +94,18 @@ impl Binvox {
             .ok_or_else(|| VoxelError::malformed(name, None, "header has no 'dim' line"))?;
         let dims = [a, c, b];
         let n = check_dims(name, dims)?;
+        // Each pair covers at most 255 voxels: refuse before allocating a grid the data cannot fill.
+        let pairs = (bytes.len() - data_start) / 2;
+        if pairs.saturating_mul(255) < n {
+            return Err(VoxelError::malformed(
+                name,
+                None,
+                format!(
+                    "truncated run-length data at byte {}: {pairs} runs cannot cover {n} voxels",
+                    bytes.len()
+                ),
+            ));
+        }
 
         let mut occ = vec![0.0f32; n];
         let mut file_index = 0usize;

@@ -286,10 +286,11 @@ impl VoxelGrid {
         self.occupancy[self.index(d, h, w)]
     }
 
-    /// Sets the occupancy of voxel `(d, h, w)`, clamped to `[0, 1]` to keep the invariant.
+    /// Sets the occupancy of voxel `(d, h, w)`, clamped to `[0, 1]` (NaN becomes 0) to keep
+    /// the invariant.
     pub fn set(&mut self, d: usize, h: usize, w: usize, v: f32) {
         let i = self.index(d, h, w);
-        self.occupancy[i] = v.clamp(0.0, 1.0);
+        self.occupancy[i] = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
     }
 
     /// Number of voxels with occupancy >= 0.5 (the threshold binvox and IoU use).
