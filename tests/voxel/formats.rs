@@ -147,10 +147,25 @@ fn cube_ply_header(format: &str) -> String {
 }
 
 fn cube_ply_binary() -> Vec<u8> {
+    cube_ply_encoded(false)
+}
+
+fn cube_ply_encoded(big_endian: bool) -> Vec<u8> {
     let off = Mesh::parse_off(CUBE_OFF, "cube.off").unwrap();
-    let mut b = cube_ply_header("binary_little_endian").into_bytes();
+    let order = |mut x: [u8; 4]| {
+        if big_endian {
+            x.reverse();
+        }
+        x
+    };
+    let format = if big_endian {
+        "binary_big_endian"
+    } else {
+        "binary_little_endian"
+    };
+    let mut b = cube_ply_header(format).into_bytes();
     for p in &off.positions {
-        p.iter().for_each(|c| b.extend(c.to_le_bytes()));
+        p.iter().for_each(|c| b.extend(order(c.to_le_bytes())));
         b.push(200); // the ignored colour property
     }
     for q in [
@@ -162,9 +177,10 @@ fn cube_ply_binary() -> Vec<u8> {
         [4, 5, 7, 6],
     ] {
         b.push(4);
-        q.iter().for_each(|i: &i32| b.extend(i.to_le_bytes()));
+        q.iter()
+            .for_each(|i: &i32| b.extend(order(i.to_le_bytes())));
     }
-    b.extend(9i32.to_le_bytes());
+    b.extend(order(9i32.to_le_bytes()));
     b
 }
 
@@ -197,6 +213,10 @@ fn mesh_loaders_agree_on_a_cube() {
     assert_eq!(ply_ascii.unwrap(), off);
     assert_eq!(
         Mesh::parse_ply_bytes(&cube_ply_binary(), "cube.ply").unwrap(),
+        off
+    );
+    assert_eq!(
+        Mesh::parse_ply_bytes(&cube_ply_encoded(true), "cube.ply").unwrap(),
         off
     );
 
@@ -302,4 +322,27 @@ fn mesh_loaders_reject_malformed_files() {
         msg.contains("byte"),
         "binary errors give the byte offset: {msg}"
     );
+}
+
+#[test]
+fn parsers_never_panic_on_truncated_or_corrupted_input() {
+    let binvox = Binvox::from_grid(pattern_grid([6, 6, 6])).to_bytes();
+    let obj = obj_bytes(&Mesh::parse_off(CUBE_OFF, "c.off").unwrap());
+    let inputs = [binvox, obj, CUBE_OFF.as_bytes().to_vec(), cube_ply_binary()];
+    for (k, bytes) in inputs.iter().enumerate() {
+        let parse = |b: &[u8]| match k {
+            0 => Binvox::parse(b, "f").map(|_| ()),
+            1 => Mesh::parse_obj(&String::from_utf8_lossy(b), "f").map(|_| ()),
+            2 => Mesh::parse_off(&String::from_utf8_lossy(b), "f").map(|_| ()),
+            _ => Mesh::parse_ply_bytes(b, "f").map(|_| ()),
+        };
+        for cut in 0..bytes.len() {
+            let _ = parse(&bytes[..cut]);
+        }
+        for (i, flip) in (0..bytes.len()).step_by(3).zip([0xff, b'9', b'-', 0x00, b'\n'].iter().cycle()) {
+            let mut b = bytes.clone();
+            b[i] = *flip;
+            let _ = parse(&b);
+        }
+    }
 }
