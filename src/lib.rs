@@ -13,6 +13,7 @@ pub mod error;
 pub mod gpu;
 pub mod graph;
 pub mod ops;
+pub mod voxel;
 
 pub use error::{Error, Result};
 pub use gpu::{Gpu, Tensor};

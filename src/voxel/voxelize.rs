@@ -1,0 +1,195 @@
+//! Solid voxelisation of triangle meshes, the way binvox made ShapeNet's grids: scale the mesh
+//! so its bounding box's longest side spans the grid, mark every voxel a triangle touches
+//! (exact triangle/box overlap), then flood-fill the empty space from the grid border. Whatever
+//! the fill cannot reach is solid, so multi-part meshes with open seams or interpenetrating
+//! parts still come out solid, as long as the parts together enclose their inside.
+
+use super::{Mesh, VoxelError, VoxelGrid, check_dims};
+use glam::DVec3;
+
+/// Fraction of a voxel the normalised bounding box is shrunk by on each side, so extreme
+/// faces that would land exactly on a voxel boundary do not also mark the neighbour outside.
+const BOUNDARY_EPS: f64 = 1e-4;
+
+/// Voxeliser settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VoxelizeOptions {
+    /// Grid side N; the result is `N^3`.
+    pub resolution: usize,
+    /// Empty voxels kept between the bounding box's longest side and the grid border
+    /// (0 = touch the border, as binvox and the RenderNet data do).
+    pub margin: f32,
+    /// Fill the inside (true) or keep only the surface shell (false).
+    pub fill: bool,
+}
+
+impl Default for VoxelizeOptions {
+    fn default() -> Self {
+        VoxelizeOptions {
+            resolution: 64,
+            margin: 0.0,
+            fill: true,
+        }
+    }
+}
+
+/// The similarity transform from mesh coordinates to voxel coordinates (voxel `i` spans
+/// `[i, i+1)` on each axis): `voxel = (p - center) * scale + N/2`. The reference renderer
+/// needs it to draw a mesh aligned with its grid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Normalization {
+    /// Centre of the mesh's bounding box (world units).
+    pub center: [f64; 3],
+    /// Voxels per world unit.
+    pub scale: f64,
+    /// Grid side N.
+    pub resolution: usize,
+}
+
+impl Normalization {
+    /// Fits the mesh's bounding box into the grid, centred, longest side = `N - 2 * margin`.
+    pub fn fit(mesh: &Mesh, opts: &VoxelizeOptions) -> Result<Self, VoxelError> {
+        let what = "voxelize";
+        let n = opts.resolution;
+        check_dims(what, [n, n, n])?;
+        let (lo, hi) = mesh
+            .bounds()
+            .ok_or_else(|| VoxelError::invalid(what, "mesh has no vertices"))?;
+        let longest = (hi - lo).max_element() as f64;
+        let avail = n as f64 - 2.0 * opts.margin as f64 - 2.0 * BOUNDARY_EPS;
+        if longest.is_nan() || longest <= 0.0 {
+            return Err(VoxelError::invalid(what, "mesh bounding box has zero size"));
+        }
+        if avail.is_nan() || avail <= 0.0 {
+            return Err(VoxelError::invalid(
+                what,
+                format!("margin {} leaves no room in a grid of {n}", opts.margin),
+            ));
+        }
+        let center = ((lo + hi) * 0.5).as_dvec3().to_array();
+        Ok(Normalization {
+            center,
+            scale: avail / longest,
+            resolution: n,
+        })
+    }
+
+    /// Maps a mesh point to voxel coordinates.
+    pub fn to_voxel(&self, p: [f32; 3]) -> [f64; 3] {
+        let v = (DVec3::from(p.map(f64::from)) - DVec3::from(self.center)) * self.scale
+            + DVec3::splat(self.resolution as f64 / 2.0);
+        v.to_array()
+    }
+}
+
+/// Voxelises a mesh into an `N^3` grid of 0/1 occupancy (axes as in [`super`]).
+pub fn voxelize(mesh: &Mesh, opts: &VoxelizeOptions) -> Result<VoxelGrid, VoxelError> {
+    mesh.validate("voxelize")?;
+    let norm = Normalization::fit(mesh, opts)?;
+    let n = opts.resolution;
+    let mut cells = mark_surface(mesh, &norm);
+    if opts.fill {
+        cells = fill_from_outside(&cells, [n, n, n]);
+    }
+    VoxelGrid::new([n, n, n], cells.iter().map(|&c| c as u8 as f32).collect())
+}
+
+/// Marks every voxel that a triangle touches, testing only voxels in the triangle's bounds.
+fn mark_surface(mesh: &Mesh, norm: &Normalization) -> Vec<bool> {
+    let n = norm.resolution;
+    let mut cells = vec![false; n * n * n];
+    let cell_range = |lo: f64, hi: f64| {
+        let clamp = |x: f64| (x.floor().max(0.0) as usize).min(n - 1);
+        clamp(lo)..=clamp(hi)
+    };
+    for t in &mesh.triangles {
+        let v = t.map(|i| DVec3::from(norm.to_voxel(mesh.positions[i as usize])));
+        let (lo, hi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
+        if hi.cmplt(DVec3::ZERO).any() || lo.cmpgt(DVec3::splat(n as f64)).any() {
+            continue;
+        }
+        for d in cell_range(lo.x, hi.x) {
+            for h in cell_range(lo.y, hi.y) {
+                for w in cell_range(lo.z, hi.z) {
+                    let i = (d * n + h) * n + w;
+                    if !cells[i]
+                        && triangle_overlaps_box(
+                            &v,
+                            DVec3::new(d as f64, h as f64, w as f64) + 0.5,
+                            0.5,
+                        )
+                    {
+                        cells[i] = true;
+                    }
+                }
+            }
+        }
+    }
+    cells
+}
+
+/// Exact triangle / axis-aligned cube overlap by the separating axis theorem
+/// (Akenine-Möller 2001): the three box normals, the triangle normal and the nine
+/// edge-by-axis cross products. Touching counts as overlapping.
+pub fn triangle_overlaps_box(tri: &[DVec3; 3], center: DVec3, half: f64) -> bool {
+    let v = tri.map(|p| p - center);
+    let edges = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
+    let separated = |axis: DVec3| {
+        let p = v.map(|q| q.dot(axis));
+        let r = half * axis.abs().element_sum();
+        p[0].min(p[1]).min(p[2]) > r || p[0].max(p[1]).max(p[2]) < -r
+    };
+    let units = [DVec3::X, DVec3::Y, DVec3::Z];
+    if units.iter().any(|&a| separated(a)) || separated(edges[0].cross(edges[1])) {
+        return false;
+    }
+    !units
+        .iter()
+        .any(|&a| edges.iter().any(|&e| separated(a.cross(e))))
+}
+
+/// Flood-fills empty cells 6-connected from the grid border; returns `true` for every cell the
+/// fill did not reach (the marked cells and everything they enclose).
+pub fn fill_from_outside(marked: &[bool], dims: [usize; 3]) -> Vec<bool> {
+    let [d, h, w] = dims;
+    let idx = |z: usize, y: usize, x: usize| (z * h + y) * w + x;
+    let mut outside = vec![false; marked.len()];
+    let mut stack = Vec::new();
+    let visit = |i: usize, outside: &mut Vec<bool>, stack: &mut Vec<usize>| {
+        if !marked[i] && !outside[i] {
+            outside[i] = true;
+            stack.push(i);
+        }
+    };
+    for z in 0..d {
+        for y in 0..h {
+            for x in 0..w {
+                if z == 0 || y == 0 || x == 0 || z == d - 1 || y == h - 1 || x == w - 1 {
+                    visit(idx(z, y, x), &mut outside, &mut stack);
+                }
+            }
+        }
+    }
+    while let Some(i) = stack.pop() {
+        let (z, y, x) = (i / (h * w), (i / w) % h, i % w);
+        if z > 0 {
+            visit(i - h * w, &mut outside, &mut stack);
+        }
+        if z + 1 < d {
+            visit(i + h * w, &mut outside, &mut stack);
+        }
+        if y > 0 {
+            visit(i - w, &mut outside, &mut stack);
+        }
+        if y + 1 < h {
+            visit(i + w, &mut outside, &mut stack);
+        }
+        if x > 0 {
+            visit(i - 1, &mut outside, &mut stack);
+        }
+        if x + 1 < w {
+            visit(i + 1, &mut outside, &mut stack);
+        }
+    }
+    outside.iter().map(|&o| !o).collect()
+}

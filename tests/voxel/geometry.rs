@@ -1,0 +1,281 @@
+//! Voxeliser, flood fill, resampling and procedural shapes.
+
+use super::*;
+
+/// Voxel-space bounds of a box under `norm` → how many voxels each axis touches.
+fn touched(norm: &Normalization, lo: Vec3, hi: Vec3) -> [std::ops::Range<usize>; 3] {
+    let (a, b) = (norm.to_voxel(lo.to_array()), norm.to_voxel(hi.to_array()));
+    [0, 1, 2].map(|k| a[k].floor() as usize..b[k].floor() as usize + 1)
+}
+
+fn solid_set(dims: usize, boxes: &[[std::ops::Range<usize>; 3]]) -> Vec<f32> {
+    let mut v = vec![0.0; dims * dims * dims];
+    for [rd, rh, rw] in boxes {
+        for d in rd.clone() {
+            for h in rh.clone() {
+                for w in rw.clone() {
+                    v[(d * dims + h) * dims + w] = 1.0;
+                }
+            }
+        }
+    }
+    v
+}
+
+#[test]
+fn voxelised_box_matches_analytic_volume() {
+    let (lo, hi) = (Vec3::ZERO, Vec3::new(2.0, 1.3, 0.7));
+    let mesh = Mesh::cuboid((lo + hi) / 2.0, (hi - lo) / 2.0, Mat3::IDENTITY);
+    assert!((mesh.signed_volume() - 1.82).abs() < 1e-5);
+    let opts = VoxelizeOptions {
+        resolution: 32,
+        margin: 4.0,
+        fill: true,
+    };
+    let grid = voxelize(&mesh, &opts).unwrap();
+    let norm = Normalization::fit(&mesh, &opts).unwrap();
+    // Exactly the voxels the closed box touches: nothing more, nothing missed.
+    assert_eq!(
+        grid.occupancy(),
+        solid_set(32, &[touched(&norm, lo, hi)]).as_slice()
+    );
+
+    // Against the analytic volume (voxel units): every voxel the box touches is solid, so the
+    // count exceeds V by about half a voxel per unit of surface area on average (a face at a
+    // random offset adds 0.5 voxel of thickness in expectation): V + A/2, within 3%.
+    let e = ((hi - lo) * norm.scale as f32).as_dvec3();
+    let v = e.x * e.y * e.z;
+    let area = 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x);
+    let count = grid.occupied_count() as f64;
+    assert!(count > v, "conservative voxelisation never loses volume");
+    assert!(
+        (count / (v + area / 2.0) - 1.0).abs() < 0.03,
+        "count {count}, V {v}, V+A/2 {}",
+        v + area / 2.0
+    );
+    let shell = voxelize(
+        &mesh,
+        &VoxelizeOptions {
+            fill: false,
+            ..opts
+        },
+    )
+    .unwrap();
+    assert!(shell.occupied_count() < grid.occupied_count());
+}
+
+#[test]
+fn voxelised_sphere_matches_analytic_volume() {
+    let mesh = Mesh::uv_sphere(Vec3::new(0.3, -1.0, 2.0), 1.7, 64, 32);
+    assert!(mesh.signed_volume() > 0.0);
+    let opts = VoxelizeOptions {
+        resolution: 48,
+        margin: 4.0,
+        fill: true,
+    };
+    let grid = voxelize(&mesh, &opts).unwrap();
+    let r = 20.0f64; // (48 - 2 * 4) / 2 voxels
+    // Every voxel touching the sphere is solid: that is the sphere grown by a unit cube (a
+    // Minkowski sum). Steiner's formula averaged over the lattice offset gives
+    // V + 3 pi R^2 (0.75 voxel shell: a cube's mean half-width) + 6 R + 1.
+    // The 64 x 32 UV sphere is inscribed (about 0.3% less volume) and one placement is not an
+    // average, so allow 2%.
+    let v = 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+    let expected = v + 3.0 * std::f64::consts::PI * r * r + 6.0 * r + 1.0;
+    let count = grid.occupied_count() as f64;
+    assert!(
+        (count / expected - 1.0).abs() < 0.02,
+        "count {count}, expected {expected}, ball {v}"
+    );
+    // A ray-parity or winding bug would leave the centre empty.
+    assert_eq!(grid.get(24, 24, 24), 1.0);
+}
+
+#[test]
+fn flood_fill_solidifies_overlapping_parts() {
+    // An L of two closed boxes whose faces cut through each other: the mesh is not a manifold
+    // and even-odd filling would hollow the overlap; filling from outside does not care.
+    let (a_lo, a_hi) = (Vec3::ZERO, Vec3::new(2.0, 0.55, 0.55));
+    let (b_lo, b_hi) = (Vec3::ZERO, Vec3::new(0.55, 2.0, 0.55));
+    let mut mesh = Mesh::cuboid((a_lo + a_hi) / 2.0, (a_hi - a_lo) / 2.0, Mat3::IDENTITY);
+    mesh.append(&Mesh::cuboid(
+        (b_lo + b_hi) / 2.0,
+        (b_hi - b_lo) / 2.0,
+        Mat3::IDENTITY,
+    ));
+    let opts = VoxelizeOptions {
+        resolution: 32,
+        margin: 4.0,
+        fill: true,
+    };
+    let grid = voxelize(&mesh, &opts).unwrap();
+    let norm = Normalization::fit(&mesh, &opts).unwrap();
+    let want = solid_set(
+        32,
+        &[touched(&norm, a_lo, a_hi), touched(&norm, b_lo, b_hi)],
+    );
+    assert_eq!(grid.occupancy(), want.as_slice());
+
+    // A hollow shell with a hole in it stays hollow; a closed one fills.
+    let n = 8;
+    let shell: Vec<bool> = (0..n * n * n)
+        .map(|i| {
+            let c = [i / 64, (i / 8) % 8, i % 8];
+            c.iter().all(|&x| (1..7).contains(&x)) && c.iter().any(|&x| x == 1 || x == 6)
+        })
+        .collect();
+    assert_eq!(
+        fill_from_outside(&shell, [n, n, n])
+            .iter()
+            .filter(|&&s| s)
+            .count(),
+        216
+    );
+    let mut holed = shell.clone();
+    holed[(n + 3) * n + 3] = false; // voxel (1, 3, 3) on the shell's d = 1 face
+    assert_eq!(
+        fill_from_outside(&holed, [n, n, n])
+            .iter()
+            .filter(|&&s| s)
+            .count(),
+        216 - 64 - 1
+    );
+}
+
+#[test]
+fn voxelize_rejects_bad_meshes() {
+    let empty = Mesh::default();
+    assert!(voxelize(&empty, &VoxelizeOptions::default()).is_err());
+    let bad = Mesh {
+        positions: vec![[0.0; 3]],
+        triangles: vec![[0, 1, 2]],
+    };
+    assert!(
+        voxelize(&bad, &VoxelizeOptions::default())
+            .unwrap_err()
+            .to_string()
+            .contains("voxelize")
+    );
+    let cube = Mesh::cuboid(Vec3::ZERO, Vec3::ONE, Mat3::IDENTITY);
+    assert!(
+        voxelize(
+            &cube,
+            &VoxelizeOptions {
+                resolution: 4096,
+                ..Default::default()
+            }
+        )
+        .is_err()
+    );
+    assert!(
+        voxelize(
+            &cube,
+            &VoxelizeOptions {
+                resolution: 8,
+                margin: 4.0,
+                fill: true
+            }
+        )
+        .is_err()
+    );
+}
+
+#[test]
+fn resampling_preserves_mass_and_range() {
+    let g = pattern_grid([64, 64, 64]);
+    let small = g.resample_to(32).unwrap();
+    let mean =
+        |g: &VoxelGrid| g.occupancy().iter().map(|&v| v as f64).sum::<f64>() / g.len() as f64;
+    assert!(
+        (mean(&small) - mean(&g)).abs() < 1e-5,
+        "box filter keeps the mean for integer ratios"
+    );
+    let big = shapes::chair(3)
+        .to_grid(16)
+        .unwrap()
+        .resample_to(40)
+        .unwrap();
+    assert_eq!(big.dims(), [40, 40, 40]);
+    assert!(big.occupancy().iter().all(|v| (0.0..=1.0).contains(v)));
+    let coloured = VoxelGrid::new([4, 4, 4], vec![1.0; 64])
+        .unwrap()
+        .with_colour(vec![0.25; 192])
+        .unwrap();
+    let up = coloured.resample_to(6).unwrap();
+    assert!(
+        up.colour()
+            .unwrap()
+            .iter()
+            .all(|&c| (c - 0.25).abs() < 1e-6)
+    );
+    assert!(up.occupancy().iter().all(|&v| (v - 1.0).abs() < 1e-6));
+    assert!(g.resample_to(0).is_err());
+}
+
+#[test]
+fn procedural_shapes_are_deterministic_and_varied() {
+    assert_eq!(shapes::chair(7), shapes::chair(7));
+    let grids: Vec<VoxelGrid> = (0..12)
+        .map(|s| shapes::chair(s).to_grid(32).unwrap())
+        .collect();
+    for (s, g) in grids.iter().enumerate() {
+        assert_eq!(
+            g,
+            &shapes::chair(s as u64).to_grid(32).unwrap(),
+            "seed {s} is deterministic"
+        );
+        let f = g.fill_fraction();
+        assert!(
+            (0.01..0.4).contains(&f),
+            "chair {s}: occupancy fraction {f}"
+        );
+    }
+    for i in 0..grids.len() {
+        for j in i + 1..grids.len() {
+            assert!(
+                grids[i].iou(&grids[j]).unwrap() < 0.95,
+                "chairs {i} and {j} are near-identical"
+            );
+        }
+    }
+    for family in Family::ALL {
+        for seed in 0..8 {
+            let shape = family.generate(seed);
+            let g = shape.to_grid(32).unwrap();
+            let f = g.fill_fraction();
+            assert!(
+                (0.005..0.7).contains(&f),
+                "{family:?} {seed}: occupancy fraction {f}"
+            );
+            // The mesh is the same solid in the same frame: its voxelisation (every voxel the
+            // surface touches) contains every sampled voxel centre and is not much larger.
+            if let Some(mesh) = shape.to_mesh() {
+                let v = voxelize(
+                    &mesh,
+                    &VoxelizeOptions {
+                        resolution: 32,
+                        ..Default::default()
+                    },
+                )
+                .unwrap();
+                let both = v
+                    .occupancy()
+                    .iter()
+                    .zip(g.occupancy())
+                    .filter(|&(&a, &b)| a >= 0.5 && b >= 0.5)
+                    .count();
+                let (nv, ng) = (v.occupied_count(), g.occupied_count());
+                assert!(
+                    both as f64 >= 0.99 * ng as f64,
+                    "{family:?} {seed}: mesh voxels miss the grid ({both} of {ng})"
+                );
+                assert!(
+                    nv < 4 * ng,
+                    "{family:?} {seed}: mesh gives {nv} voxels, grid {ng}"
+                );
+            }
+        }
+    }
+    let smooth = shapes::sofa(1).to_grid_supersampled(16, 3).unwrap();
+    assert!(smooth.occupancy().iter().any(|&v| v > 0.0 && v < 1.0));
+}
