@@ -1,0 +1,4 @@
+//! Plain-Rust f64 references of every kernel, shared by the kernel tests.
+#![allow(dead_code)]
+
+pub mod phong;
