@@ -1,4 +1,5 @@
 //! Plain-Rust f64 references of every kernel, shared by the kernel tests.
 #![allow(dead_code)]
 
+pub mod loss;
 pub mod phong;

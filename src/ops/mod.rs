@@ -7,6 +7,7 @@
 //! accumulate into) their gradient outputs.
 
 pub mod elu;
+pub mod loss;
 pub mod phong;
 pub mod reduce;
 pub mod sigmoid;
