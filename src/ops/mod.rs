@@ -6,6 +6,7 @@
 //! caller-allocated so a memory planner can place them; backward functions write (never
 //! accumulate into) their gradient outputs.
 
+pub mod adam;
 pub mod elu;
 pub mod loss;
 pub mod phong;
