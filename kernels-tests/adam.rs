@@ -7,13 +7,12 @@ use common::*;
 use reference::adam::{Hyper, step};
 use rendernet::ops::adam::Adam;
 
-#[test]
-fn several_steps_match_the_reference() {
+/// Six steps of `adam` on a fresh state, checking parameter, m and v after each.
+fn six_steps(adam: Adam, seed: u64) {
     // Odd, non-power-of-two parameter shape (a conv weight), more than one workgroup.
     let shape = [5, 3, 3, 7];
     let n: usize = shape.iter().product();
-    let mut rng = Rng(31);
-    let adam = Adam { lr: 0.01, ..Adam::new(0.0) };
+    let mut rng = Rng(seed);
     let h = Hyper { lr: adam.lr as f64, beta1: adam.beta1 as f64, beta2: adam.beta2 as f64, eps: adam.eps as f64 };
     let mut param = f32_round(&rng.vec(n, -1.0, 1.0));
     let (mut m, mut v) = (vec![0.0; n], vec![0.0; n]);
@@ -25,12 +24,23 @@ fn several_steps_match_the_reference() {
         run(|p| adam.step(gpu(), p, t, &tp, &tg, &tm, &tv));
         step(h, t, &mut param, &g, &mut m, &mut v);
         // The f32 state follows the f64 one to a few ulps per step; an update is ~lr = 1e-2,
-        // so a wrong bias correction or beta shows at >= 1e-3 while the f32 drift over six
+        // so a wrong bias correction or beta shows at >= 1e-4 while the f32 drift over six
         // steps stays < 1e-6.
         assert_close(&format!("param after step {t}"), &download(&tp), &param, 2e-6, 1e-5);
         assert_close(&format!("m after step {t}"), &download(&tm), &m, 1e-6, 1e-5);
         assert_close(&format!("v after step {t}"), &download(&tv), &v, 1e-6, 1e-5);
     }
+}
+
+#[test]
+fn several_steps_match_the_reference() {
+    six_steps(Adam { lr: 0.01, ..Adam::new(0.0) }, 31);
+}
+
+#[test]
+fn several_steps_with_other_betas_match_the_reference() {
+    // The original's beta1 = 0.5 makes beta1 and 1 - beta1 equal, which would hide a swap.
+    six_steps(Adam { lr: 0.01, beta1: 0.8, beta2: 0.95, eps: 1e-8 }, 32);
 }
 
 #[test]
