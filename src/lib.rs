@@ -11,7 +11,7 @@
 
 pub mod error;
 pub mod gpu;
-// pub mod graph; (enabled once ops::adam lands)
+pub mod graph;
 pub mod ops;
 pub mod voxel;
 

@@ -4,4 +4,7 @@
 #![allow(dead_code)]
 
 pub mod activations;
+pub mod adam;
+pub mod loss;
+pub mod phong;
 pub mod projection;

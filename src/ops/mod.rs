@@ -6,9 +6,12 @@
 //! caller-allocated so a memory planner can place them; backward functions write (never
 //! accumulate into) their gradient outputs.
 
+pub mod adam;
 pub mod add;
 pub mod dropout;
 pub mod elu;
+pub mod loss;
+pub mod phong;
 pub mod prelu;
 pub mod projection;
 pub mod reduce;
