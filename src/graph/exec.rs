@@ -123,10 +123,6 @@ impl Executor {
         t.to_vec(gpu)
     }
 
-    pub(crate) fn tensor(&self, v: Value) -> Option<&Tensor> {
-        self.values[v.0].as_ref()
-    }
-
     /// Runs the forward pass only (one submit).
     pub fn forward(&mut self, gpu: &Gpu) -> Result<StepStats> {
         self.run(gpu, None, None)
@@ -181,6 +177,9 @@ impl Executor {
                 )));
             }
         }
+        if let Some(l) = loss {
+            self.keep[l.0] = true;
+        }
         let nodes = self.graph.nodes.clone();
         let f = nodes.len();
         let bw = loss.map(|l| self.backward_nodes(l)).unwrap_or_else(|| vec![false; f]);
@@ -212,10 +211,9 @@ impl Executor {
                     self.pool.release(t);
                 }
             }
-            if !self.grad_wanted[v] {
-                if let Some(t) = self.grads[v].take() {
-                    self.pool.release(t);
-                }
+            // Gradients are per run: last run's, read by now, must not be summed into.
+            if let Some(t) = self.grads[v].take() {
+                self.pool.release(t);
             }
         }
         let d0 = gpu.dispatch_count();
@@ -309,7 +307,7 @@ impl Executor {
             // later contributions go to a temporary and are summed in.
             let mut targets: Vec<Option<(Tensor, bool)>> = Vec::new(); // (tensor, accumulate)
             for (j, i) in n.inputs.iter().enumerate() {
-                if !(self.grad_wanted[i.0] || produced_by_bw[i.0]) {
+                if !(self.grad_wanted[i.0] || produced_by_bw[i.0]) || !n.op.differentiable(j) {
                     targets.push(None);
                     continue;
                 }

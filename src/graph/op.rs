@@ -9,10 +9,12 @@
 //! | `Dropout` | x | nothing (the mask is a function of the seed) |
 //! | `Add` | a, b | nothing |
 //! | `Projection` | x[N,C,D,H,W], w[O,C*D,1,1], b[O] | x, w |
+//! | `Phong` | normal[N,3,H,W], albedo[N,C,H,W], mask[N,1,H,W], light[N,6] | all four |
+//! | `Loss` | prediction, target (no gradient) | both |
 
 use crate::error::{Result, shape_err};
 use crate::gpu::{Gpu, Tensor};
-use crate::ops::{self, dropout::Dropout};
+use crate::ops::{self, dropout::Dropout, loss::Loss, phong::Phong};
 
 /// An op in a graph, with its configuration.
 #[derive(Clone, Debug)]
@@ -29,6 +31,10 @@ pub enum Op {
     Add,
     /// Projection unit: fold depth into channels, 1x1 conv with bias.
     Projection,
+    /// Phong shading of predicted normal/albedo/mask maps under an input light.
+    Phong(Phong),
+    /// A scalar loss `[1]` of a prediction against a target.
+    Loss(Loss),
 }
 
 /// What a node's forward or backward gets to work with.
@@ -50,14 +56,18 @@ impl Op {
             Op::Dropout(_) => "dropout",
             Op::Add => "add",
             Op::Projection => "projection",
+            Op::Phong(_) => "phong",
+            Op::Loss(Loss::Mse) => "mse",
+            Op::Loss(Loss::Bce) => "bce",
         }
     }
 
     fn arity(&self) -> usize {
         match self {
             Op::Sigmoid | Op::Elu(_) | Op::Dropout(_) => 1,
-            Op::Prelu | Op::Add => 2,
+            Op::Prelu | Op::Add | Op::Loss(_) => 2,
             Op::Projection => 3,
+            Op::Phong(_) => 4,
         }
     }
 
@@ -87,7 +97,27 @@ impl Op {
                 }
                 Ok(d.output_shape())
             }
+            Op::Phong(_) => {
+                let (n, h, w) = (s[0][0], s[0].get(2).copied().unwrap_or(0), s[0].get(3).copied().unwrap_or(0));
+                let c = s[1].get(1).copied().unwrap_or(0);
+                let ok = s[0] == [n, 3, h, w] && (c == 1 || c == 3) && s[1] == [n, c, h, w] && s[2] == [n, 1, h, w] && s[3] == [n, 6];
+                if !ok {
+                    return Err(shape_err("phong", "needs normal [N,3,H,W], albedo [N,1|3,H,W], mask [N,1,H,W], light [N,6]"));
+                }
+                Ok(vec![n, 3, h, w])
+            }
+            Op::Loss(_) => {
+                if s[0] != s[1] {
+                    return Err(shape_err(self.name(), "prediction and target must have one shape"));
+                }
+                Ok(vec![1])
+            }
         }
+    }
+
+    /// Whether input `j` can receive a gradient (a loss's target cannot).
+    pub(crate) fn differentiable(&self, j: usize) -> bool {
+        !matches!(self, Op::Loss(_)) || j == 0
     }
 
     /// Which inputs (by position) and whether the output must be kept for backward.
@@ -98,6 +128,8 @@ impl Op {
             Op::Prelu => (&[0, 1], false),
             Op::Dropout(_) | Op::Add => (&[], false),
             Op::Projection => (&[0, 1], false),
+            Op::Phong(_) => (&[0, 1, 2, 3], false),
+            Op::Loss(_) => (&[0, 1], false),
         }
     }
 
@@ -118,6 +150,8 @@ impl Op {
             Op::Dropout(_) => self.dropout(c.training).forward(g, p, c.seed, x[0], y),
             Op::Add => ops::add::forward(g, p, x[0], x[1], y),
             Op::Projection => ops::projection::forward(g, p, x[0], x[1], x[2], y),
+            Op::Phong(ph) => ph.forward(g, p, &phong_inputs(x), y),
+            Op::Loss(l) => l.forward(g, p, x[0], x[1], y),
         }
     }
 
@@ -136,12 +170,9 @@ impl Op {
             Op::Sigmoid => some(dx[0], |d| ops::sigmoid::backward(g, p, y, dy, d)),
             Op::Elu(a) => some(dx[0], |d| ops::elu::backward(g, p, *a, x[0], dy, d)),
             Op::Prelu => {
-                // The kernel writes both gradients; a scratch takes the one nobody asked for.
-                let tmp_x;
-                let tmp_a;
-                let d_x = match dx[0] { Some(t) => t, None => { tmp_x = Tensor::zeros(g, x[0].shape())?; &tmp_x } };
-                let d_a = match dx[1] { Some(t) => t, None => { tmp_a = Tensor::zeros(g, x[1].shape())?; &tmp_a } };
-                ops::prelu::backward(g, p, x[0], x[1], dy, d_x, d_a)
+                // The kernel writes both gradients; scratch takes the one nobody asked for.
+                let d = or_scratch(g, x, dx)?;
+                ops::prelu::backward(g, p, x[0], x[1], dy, &d[0], &d[1])
             }
             Op::Dropout(_) => some(dx[0], |d| self.dropout(c.training).backward(g, p, c.seed, dy, d)),
             Op::Add => unreachable!("the executor passes add's gradient through without a kernel"),
@@ -150,8 +181,24 @@ impl Op {
                 some(dx[1], |d| ops::projection::backward_weight(g, p, x[0], dy, d))?;
                 some(dx[2], |d| ops::projection::backward_bias(g, p, dy, d))
             }
+            Op::Phong(ph) => {
+                let d = or_scratch(g, x, dx)?;
+                let grads = ops::phong::Inputs { normal: &d[0], albedo: &d[1], mask: &d[2], light: &d[3] };
+                ph.backward(g, p, &phong_inputs(x), dy, &grads)
+            }
+            Op::Loss(l) => some(dx[0], |d| l.backward(g, p, x[0], x[1], dy, d)),
         }
     }
+}
+
+fn phong_inputs<'a>(x: &[&'a Tensor]) -> ops::phong::Inputs<'a> {
+    ops::phong::Inputs { normal: x[0], albedo: x[1], mask: x[2], light: x[3] }
+}
+
+/// The requested gradient tensors, with scratch standing in for unrequested ones, for
+/// kernels that always write every gradient.
+fn or_scratch(g: &Gpu, x: &[&Tensor], dx: &[Option<&Tensor>]) -> Result<Vec<Tensor>> {
+    dx.iter().zip(x).map(|(d, x)| d.map_or_else(|| Tensor::zeros(g, x.shape()), |t| Ok(t.clone()))).collect()
 }
 
 fn some(t: Option<&Tensor>, f: impl FnOnce(&Tensor) -> Result<()>) -> Result<()> {
