@@ -8,6 +8,7 @@
 
 pub mod elu;
 pub mod reduce;
+pub mod resample;
 pub mod sigmoid;
 
 use crate::error::{Result, shape_err};
