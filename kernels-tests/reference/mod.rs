@@ -8,3 +8,4 @@ pub mod adam;
 pub mod loss;
 pub mod phong;
 pub mod projection;
+pub mod resample;

@@ -15,6 +15,7 @@ pub mod phong;
 pub mod prelu;
 pub mod projection;
 pub mod reduce;
+pub mod resample;
 pub mod sigmoid;
 
 use crate::error::{Result, shape_err};

@@ -1,0 +1,176 @@
+//! Rigid-body resampling against the f64 reference: forward, backward to the grid and to the
+//! pose by finite differences, plus exact geometric checks (identity, quarter turns, shifts,
+//! scale) that pin the axis conventions finite differences cannot see.
+
+mod common;
+mod reference;
+use common::*;
+use reference::resample::{self as rref, Dims};
+use rendernet::ops::resample;
+use std::f64::consts::FRAC_PI_2;
+
+// Non-cubic, odd sizes; output larger than input in D and H, equal in W; C = 2.
+const DIMS: Dims = Dims { n: 2, c: 2, inp: [5, 6, 7], out: [8, 9, 7] };
+
+fn shape(d: &Dims, s: [usize; 3]) -> [usize; 5] {
+    [d.n, d.c, s[0], s[1], s[2]]
+}
+
+/// Random poses (f32-rounded): scale 0.7-1.4, angles anywhere, translations within 1.5 voxels.
+fn random_poses(rng: &mut Rng, n: usize) -> Vec<f64> {
+    let mut p = Vec::new();
+    for _ in 0..n {
+        p.push(rng.uniform(0.7, 1.4));
+        p.push(rng.uniform(-3.2, 3.2));
+        p.push(rng.uniform(-3.2, 3.2));
+        p.extend(rng.vec(3, -1.5, 1.5));
+    }
+    f32_round(&p)
+}
+
+/// Grid, poses and upstream gradient for one random case.
+fn case(seed: u64, d: &Dims) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let mut rng = Rng(seed);
+    let x = f32_round(&rng.vec(d.n * d.c * d.inp.iter().product::<usize>(), -1.0, 1.0));
+    let poses = random_poses(&mut rng, d.n);
+    let r = f32_round(&rng.vec(d.n * d.c * d.out.iter().product::<usize>(), -1.0, 1.0));
+    (x, poses, r)
+}
+
+/// Runs the forward on the GPU.
+fn gpu_forward(d: &Dims, x: &[f64], poses: &[f64]) -> Vec<f64> {
+    let (tx, tp, ty) = (upload(&shape(d, d.inp), x), upload(&[d.n, 6], poses), zeros(&shape(d, d.out)));
+    run(|p| resample::forward(gpu(), p, &tx, &tp, &ty));
+    download(&ty)
+}
+
+#[test]
+fn forward_matches_reference() {
+    let (x, poses, _) = case(11, &DIMS);
+    let want = rref::forward(&DIMS, &x, &poses);
+    // |x| <= 1: sample points carry f32 rounding ~1e-6 (coordinates < 10), times a trilinear
+    // slope <= 2 per axis, plus f32 sin/cos; 2e-5 leaves ~5x headroom, a wrong tap is ~0.1.
+    assert_close("resample forward", &gpu_forward(&DIMS, &x, &poses), &want, 2e-5, 1e-4);
+}
+
+#[test]
+fn backward_input_matches_finite_differences() {
+    let (x, poses, r) = case(12, &DIMS);
+    let (tp, tr, tdx) = (upload(&[DIMS.n, 6], &poses), upload(&shape(&DIMS, DIMS.out), &r), zeros(&shape(&DIMS, DIMS.inp)));
+    run(|p| resample::backward_input(gpu(), p, &tp, &tr, &tdx));
+    let want = fd_grad(&x, |x| dot(&r, &rref::forward(&DIMS, x, &poses)));
+    // Each dx sums <= (2/s + 1)^3 < 64 terms |r| * weight <= 1 with weights off by ~1e-6:
+    // error ~1e-5 at worst; a missed output voxel is ~0.1.
+    assert_close("resample backward_input", &download(&tdx), &want, 2e-5, 1e-4);
+}
+
+/// Smallest distance of any sample coordinate to an integer: trilinear interpolation has a
+/// kink there, and a finite difference straddling one is wrong by O(1).
+fn kink_margin(d: &Dims, poses: &[f64]) -> f64 {
+    let mut m = f64::INFINITY;
+    for n in 0..d.n {
+        for o in rref::out_voxels(d) {
+            for q in rref::sample_point(d, &poses[n * 6..n * 6 + 6], o) {
+                m = m.min((q - q.round()).abs());
+            }
+        }
+    }
+    m
+}
+
+#[test]
+fn backward_pose_matches_finite_differences() {
+    let (x, poses, r) = case(13, &DIMS);
+    // FD steps of 1e-6 move sample points by < 1e-5; stay 10x away from every kink.
+    // (If this fails for a new seed, pick another seed rather than loosening anything.)
+    let margin = kink_margin(&DIMS, &poses);
+    assert!(margin > 1e-4, "seed puts a sample {margin} from a kink; choose another seed");
+    let (tx, tp, tr, tdp) =
+        (upload(&shape(&DIMS, DIMS.inp), &x), upload(&[DIMS.n, 6], &poses), upload(&shape(&DIMS, DIMS.out), &r), zeros(&[DIMS.n, 6]));
+    run(|p| resample::backward_pose(gpu(), p, &tx, &tp, &tr, &tdp));
+    let want = fd_grad(&poses, |p| dot(&r, &rref::forward(&DIMS, &x, p)));
+    // Sums of ~1000 voxel terms of size ~1-10 (|dq/dθ| <= |u|/s < 9) with f32 errors ~1e-7
+    // relative each, partly cancelling, against gradients of order 1-30: observed errors are
+    // ~1e-5, so atol = 1e-5 * max|grad| (~3e-4) leaves ~20x headroom; a dropped or flipped
+    // term of any one partial moves it by O(1).
+    let scale = want.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert_close("resample backward_pose", &download(&tdp), &want, 1e-5 * scale, 1e-4);
+}
+
+#[test]
+fn identity_pose_reproduces_input_exactly() {
+    // Even sizes make the centres half-integers: still exact, as c_in = c_out.
+    let d = Dims { n: 2, c: 3, inp: [4, 5, 6], out: [4, 5, 6] };
+    let mut rng = Rng(14);
+    let x = f32_round(&rng.vec(d.n * d.c * 120, -1.0, 1.0));
+    let poses = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0].repeat(d.n);
+    assert_eq!(gpu_forward(&d, &x, &poses), x, "identity forward");
+    // The gather's transpose is the identity too: dx = dy exactly.
+    let (tp, tdy, tdx) = (upload(&[d.n, 6], &poses), upload(&shape(&d, d.out), &x), zeros(&shape(&d, d.inp)));
+    run(|p| resample::backward_input(gpu(), p, &tp, &tdy, &tdx));
+    assert_eq!(download(&tdx), x, "identity backward_input");
+}
+
+/// Forward with one pose (N = 1, C = 1) and checks y[map(i)] = x[i] for every input voxel.
+fn check_mapping(what: &str, inp: [usize; 3], out: [usize; 3], pose: [f64; 6], map: impl Fn([usize; 3]) -> [usize; 3]) {
+    let d = Dims { n: 1, c: 1, inp, out };
+    // Distinct values (all voxels differ) so any axis mix-up shows.
+    let x: Vec<f64> = (0..inp.iter().product::<usize>()).map(|i| 1.0 + i as f64).collect();
+    let y = gpu_forward(&d, &x, &f32_round(&pose));
+    for a in 0..inp[0] {
+        for b in 0..inp[1] {
+            for c in 0..inp[2] {
+                let o = map([a, b, c]);
+                let got = y[(o[0] * out[1] + o[1]) * out[2] + o[2]];
+                let want = x[(a * inp[1] + b) * inp[2] + c];
+                // f32 sin/cos of π/2 are off by ~4e-8: a ~1e-7 blend with a neighbour.
+                assert!((got - want).abs() < 1e-4, "{what}: input {:?} should land at {o:?} = {want}, found {got}", [a, b, c]);
+            }
+        }
+    }
+}
+
+#[test]
+fn quarter_turns_shifts_and_scale_move_voxels_where_expected() {
+    // Azimuth +90°: +W turns into +D, D into -W (p_d = r_w, p_w = -r_d about the centres).
+    check_mapping("azimuth 90", [5, 3, 7], [7, 3, 5], [1.0, FRAC_PI_2, 0.0, 0.0, 0.0, 0.0], |[d, h, w]| [w, h, 4 - d]);
+    // Elevation +90°: +H turns into +D, D into -H.
+    check_mapping("elevation 90", [5, 7, 3], [7, 5, 3], [1.0, 0.0, FRAC_PI_2, 0.0, 0.0, 0.0], |[d, h, w]| [h, 4 - d, w]);
+    // Azimuth first, then elevation: W -> D -> -H... p = R_el R_az q.
+    check_mapping("azimuth then elevation", [3, 5, 7], [5, 7, 3], [1.0, FRAC_PI_2, FRAC_PI_2, 0.0, 0.0, 0.0], |[d, h, w]| {
+        // R_az: (d, h, w) -> (w', h', -d'); R_el: (a, b, c) -> (b, -a, c), about the centres.
+        let (rd, rh, rw) = (d as i64 - 1, h as i64 - 2, w as i64 - 3);
+        let (ad, ah, aw) = (rw, rh, -rd);
+        let (bd, bh, bw) = (ah, -ad, aw);
+        [(bd + 2) as usize, (bh + 3) as usize, (bw + 1) as usize]
+    });
+    // Translation (t_d, t_h, t_w) in output voxels, same-size grids.
+    check_mapping("translation", [3, 4, 5], [5, 6, 5], [1.0, 0.0, 0.0, 1.0, -1.0, 0.0], |[d, h, w]| [d + 2, h, w]);
+    // Scale 2 about the centres: input voxel k lands on output voxel 2k.
+    check_mapping("scale 2", [3, 2, 4], [5, 3, 7], [2.0, 0.0, 0.0, 0.0, 0.0, 0.0], |[d, h, w]| [2 * d, 2 * h, 2 * w]);
+}
+
+#[test]
+fn pose_from_view_follows_paper_conventions() {
+    let p = resample::pose_from_view(90.0, 90.0, 3.3);
+    assert_eq!(p, [1.0, std::f32::consts::FRAC_PI_2, 0.0, 0.0, 0.0, 0.0]);
+    let p = resample::pose_from_view(0.0, 10.0, 6.6);
+    assert!((p[0] - 0.5).abs() < 1e-7 && (p[2] + 80f32.to_radians()).abs() < 1e-6, "{p:?}");
+}
+
+#[test]
+fn bad_shapes_are_errors_not_panics() {
+    let (x, y, pose) = (zeros(&[2, 1, 3, 3, 3]), zeros(&[2, 1, 4, 4, 4]), zeros(&[2, 6]));
+    let expect_err = |what: &str, r: rendernet::Result<()>, needle: &str| {
+        let e = r.expect_err(what).to_string();
+        assert!(e.contains(needle), "{what}: {e}");
+    };
+    let g = gpu();
+    expect_err("pose [2, 5]", g.run(|p| resample::forward(g, p, &x, &zeros(&[2, 5]), &y)), "resample_forward");
+    expect_err("pose batch", g.run(|p| resample::forward(g, p, &x, &zeros(&[1, 6]), &y)), "pose");
+    expect_err("rank 4 x", g.run(|p| resample::forward(g, p, &zeros(&[2, 3, 3, 3]), &pose, &y)), "x");
+    expect_err("y channels", g.run(|p| resample::forward(g, p, &x, &pose, &zeros(&[2, 2, 4, 4, 4]))), "y");
+    expect_err("dx batch", g.run(|p| resample::backward_input(g, p, &pose, &y, &zeros(&[1, 1, 3, 3, 3]))), "dx");
+    expect_err("dy channels", g.run(|p| resample::backward_pose(g, p, &x, &pose, &zeros(&[2, 3, 4, 4, 4]), &pose)), "dy");
+    expect_err("dpose", g.run(|p| resample::backward_pose(g, p, &x, &pose, &y, &zeros(&[2, 5]))), "dpose");
+}
