@@ -9,6 +9,7 @@
 //! | `Dropout` | x | nothing (the mask is a function of the seed) |
 //! | `Add` | a, b | nothing |
 //! | `Projection` | x[N,C,D,H,W], w[O,C*D,1,1], b[O] | x, w |
+//! | `Resample(out)` | x[N,C,D,H,W], pose[N,6] | x, pose |
 //! | `Phong` | normal[N,3,H,W], albedo[N,C,H,W], mask[N,1,H,W], light[N,6] | all four |
 //! | `Loss` | prediction, target (no gradient) | both |
 
@@ -31,6 +32,8 @@ pub enum Op {
     Add,
     /// Projection unit: fold depth into channels, 1x1 conv with bias.
     Projection,
+    /// Rigid-body resampling of a grid into a camera-aligned grid of spatial size `[Do, Ho, Wo]`.
+    Resample([usize; 3]),
     /// Phong shading of predicted normal/albedo/mask maps under an input light.
     Phong(Phong),
     /// A scalar loss `[1]` of a prediction against a target.
@@ -56,6 +59,7 @@ impl Op {
             Op::Dropout(_) => "dropout",
             Op::Add => "add",
             Op::Projection => "projection",
+            Op::Resample(_) => "resample",
             Op::Phong(_) => "phong",
             Op::Loss(Loss::Mse) => "mse",
             Op::Loss(Loss::Bce) => "bce",
@@ -65,7 +69,7 @@ impl Op {
     fn arity(&self) -> usize {
         match self {
             Op::Sigmoid | Op::Elu(_) | Op::Dropout(_) => 1,
-            Op::Prelu | Op::Add | Op::Loss(_) => 2,
+            Op::Prelu | Op::Add | Op::Loss(_) | Op::Resample(_) => 2,
             Op::Projection => 3,
             Op::Phong(_) => 4,
         }
@@ -96,6 +100,12 @@ impl Op {
                     return Err(shape_err("projection", format!("bias must be [{}]", d.o)));
                 }
                 Ok(d.output_shape())
+            }
+            Op::Resample([d, h, w]) => {
+                if s[0].len() != 5 || s[1] != [s[0][0], 6] {
+                    return Err(shape_err("resample", "needs a grid [N,C,D,H,W] and a pose [N,6]"));
+                }
+                Ok(vec![s[0][0], s[0][1], *d, *h, *w])
             }
             Op::Phong(_) => {
                 let (n, h, w) = (s[0][0], s[0].get(2).copied().unwrap_or(0), s[0].get(3).copied().unwrap_or(0));
@@ -128,6 +138,7 @@ impl Op {
             Op::Prelu => (&[0, 1], false),
             Op::Dropout(_) | Op::Add => (&[], false),
             Op::Projection => (&[0, 1], false),
+            Op::Resample(_) => (&[0, 1], false),
             Op::Phong(_) => (&[0, 1, 2, 3], false),
             Op::Loss(_) => (&[0, 1], false),
         }
@@ -150,6 +161,7 @@ impl Op {
             Op::Dropout(_) => self.dropout(c.training).forward(g, p, c.seed, x[0], y),
             Op::Add => ops::add::forward(g, p, x[0], x[1], y),
             Op::Projection => ops::projection::forward(g, p, x[0], x[1], x[2], y),
+            Op::Resample(_) => ops::resample::forward(g, p, x[0], x[1], y),
             Op::Phong(ph) => ph.forward(g, p, &phong_inputs(x), y),
             Op::Loss(l) => l.forward(g, p, x[0], x[1], y),
         }
@@ -180,6 +192,10 @@ impl Op {
                 some(dx[0], |d| ops::projection::backward_input(g, p, dy, x[1], d))?;
                 some(dx[1], |d| ops::projection::backward_weight(g, p, x[0], dy, d))?;
                 some(dx[2], |d| ops::projection::backward_bias(g, p, dy, d))
+            }
+            Op::Resample(_) => {
+                some(dx[0], |d| ops::resample::backward_input(g, p, x[1], dy, d))?;
+                some(dx[1], |d| ops::resample::backward_pose(g, p, x[0], x[1], dy, d))
             }
             Op::Phong(ph) => {
                 let d = or_scratch(g, x, dx)?;
