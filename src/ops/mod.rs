@@ -6,6 +6,8 @@
 //! caller-allocated so a memory planner can place them; backward functions write (never
 //! accumulate into) their gradient outputs.
 
+pub mod conv;
+pub mod conv_transpose;
 pub mod elu;
 pub mod reduce;
 pub mod sigmoid;
