@@ -106,8 +106,18 @@ fn reference(c: &Case, g: &Geom, x: &[f64], w: &[f64], b: Option<&[f64]>) -> Vec
     }
 }
 
-/// Runs forward with bias on the GPU and returns (x, w, b, y_gpu, y_reference, geometry).
-fn forward(c: &Case, rng: &mut Rng) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Geom) {
+/// A forward run: the inputs, the GPU's output and the reference's.
+struct Forward {
+    x: Vec<f64>,
+    w: Vec<f64>,
+    b: Vec<f64>,
+    y: Vec<f64>,
+    want: Vec<f64>,
+    g: Geom,
+}
+
+/// Runs forward with bias on random inputs, on the GPU and in the reference.
+fn forward(c: &Case, rng: &mut Rng) -> Forward {
     let g = geom(c);
     let (xs, ws, ys) = (shape(c.d2, c.n, c.ci, g.input), w_shape(c), shape(c.d2, c.n, c.co, g.output));
     let got_shape = match c.op {
@@ -127,13 +137,13 @@ fn forward(c: &Case, rng: &mut Rng) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, 
         Op::Transposed(op) => op.forward(gpu(), p, &tx, &tw, Some(&tb), &ty),
     });
     let want = reference(c, &g, &x, &w, Some(&b));
-    (x, w, b, download(&ty), want, g)
+    Forward { y: download(&ty), x, w, b, want, g }
 }
 
 /// Forward against the reference, then every gradient against finite differences.
 fn check(c: &Case, seed: u64) {
     let mut rng = Rng(seed);
-    let (x, w, b, y, want, g) = forward(c, &mut rng);
+    let Forward { x, w, b, y, want, g } = forward(c, &mut rng);
     assert_close(&format!("{c:?} forward"), &y, &want, ATOL, RTOL);
 
     let (xs, ws, ys) = (shape(c.d2, c.n, c.ci, g.input), w_shape(c), shape(c.d2, c.n, c.co, g.output));
@@ -275,7 +285,7 @@ fn random_shapes_forward() {
         let h = Conv { kernel, stride, padding };
         let op = if seed % 2 == 0 { Op::Conv(h) } else { Op::Transposed(ConvTranspose { conv: h }) };
         let c = Case { op, d2, n, ci, co, input, output: None };
-        let (_, _, _, y, want, _) = forward(&c, &mut Rng(seed + 1000));
+        let Forward { y, want, .. } = forward(&c, &mut Rng(seed + 1000));
         assert_close(&format!("seed {seed}: {c:?} forward"), &y, &want, ATOL, RTOL);
     }
 }

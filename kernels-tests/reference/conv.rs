@@ -20,7 +20,7 @@ pub struct Geom {
 
 /// TensorFlow SAME on one axis: `(out, before, after)`.
 pub fn same_pads(len: usize, k: usize, s: usize) -> (usize, usize, usize) {
-    let out = (len + s - 1) / s;
+    let out = len.div_ceil(s);
     let total = ((out - 1) * s + k) as i64 - len as i64;
     let total = total.max(0) as usize;
     (out, total / 2, total - total / 2)
