@@ -5,6 +5,7 @@
 
 pub mod activations;
 pub mod adam;
+pub mod conv;
 pub mod loss;
 pub mod phong;
 pub mod projection;

@@ -8,6 +8,8 @@
 
 pub mod adam;
 pub mod add;
+pub mod conv;
+pub mod conv_transpose;
 pub mod dropout;
 pub mod elu;
 pub mod loss;

@@ -1,0 +1,320 @@
+//! 3D and 2D convolution (binds `shaders/conv.wgsl`): any kernel size, per-axis stride,
+//! asymmetric padding, optional bias. A 2D conv is the 3D kernel with depth 1 (NCHW seen as
+//! NC1HW, OIHW as OI1HW), so one shader serves both. The kernels are reference-quality
+//! (one invocation per output value, deterministic); faster kernels can slot in behind
+//! [`Conv`]'s methods without changing callers.
+
+use super::{expect_rank, expect_shape};
+use crate::error::{Result, shape_err};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
+
+const SHADER: Shader = Shader { name: "conv", source: include_str!("../../shaders/conv.wgsl") };
+
+/// How a conv pads its input, per spatial axis (depth, height, width).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Padding {
+    /// TensorFlow's `SAME`: `out = ceil(in / stride)`, `pad_total = max((out - 1) * stride +
+    /// k - in, 0)`, `before = pad_total / 2`, `after` the rest (one more than `before` for
+    /// even kernels at stride 1: the original RenderNet relies on this asymmetry).
+    Same,
+    /// Zero padding of `before` and `after` values on each axis.
+    Explicit {
+        /// Padding before each axis (depth, height, width).
+        before: [usize; 3],
+        /// Padding after each axis.
+        after: [usize; 3],
+    },
+}
+
+impl Padding {
+    /// Explicit 2D padding `[top, left]`, `[bottom, right]` (no depth padding).
+    pub fn explicit_2d(before: [usize; 2], after: [usize; 2]) -> Padding {
+        Padding::Explicit { before: [0, before[0], before[1]], after: [0, after[0], after[1]] }
+    }
+
+    /// `(before, after)` on one axis for an input of length `len`.
+    fn resolve(&self, axis: usize, len: usize, k: usize, s: usize) -> (usize, usize) {
+        match *self {
+            Padding::Same => {
+                let out = len.div_ceil(s);
+                let total = ((out - 1) * s + k).saturating_sub(len);
+                (total / 2, total - total / 2)
+            }
+            Padding::Explicit { before, after } => (before[axis], after[axis]),
+        }
+    }
+}
+
+/// A convolution's hyper-parameters, for 3D (`NCDHW` input, `OIDHW` weights) or 2D (`NCHW`,
+/// `OIHW`, stored with kernel depth 1). Input and weight shapes come with each call, so one
+/// `Conv` serves any batch size and resolution.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Conv {
+    /// Kernel size (depth, height, width).
+    pub kernel: [usize; 3],
+    /// Stride (depth, height, width).
+    pub stride: [usize; 3],
+    /// Padding rule.
+    pub padding: Padding,
+}
+
+/// Everything the kernels need about one conv call, resolved from the shapes: the "input"
+/// and "output" are those of the forward conv (for a transposed conv, its output and input).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Geometry {
+    /// Batch size.
+    pub n: usize,
+    /// Forward input channels.
+    pub ci: usize,
+    /// Forward output channels.
+    pub co: usize,
+    /// Forward input spatial size (depth 1 for 2D).
+    pub input: [usize; 3],
+    /// Forward output spatial size.
+    pub output: [usize; 3],
+    /// Kernel size.
+    pub kernel: [usize; 3],
+    /// Stride.
+    pub stride: [usize; 3],
+    /// Padding before each axis (the padding after is implied by `output`).
+    pub pad: [usize; 3],
+    /// 5 for 3D, 4 for 2D: how shapes are written back.
+    pub rank: usize,
+}
+
+impl Geometry {
+    fn shape(&self, a: usize, b: usize, sp: [usize; 3]) -> Vec<usize> {
+        if self.rank == 4 { vec![a, b, sp[1], sp[2]] } else { vec![a, b, sp[0], sp[1], sp[2]] }
+    }
+    /// The forward conv's output shape.
+    pub fn y_shape(&self) -> Vec<usize> {
+        self.shape(self.n, self.co, self.output)
+    }
+    fn params(&self, has_bias: bool, total: usize) -> Params {
+        let u = |v: usize| v as u32;
+        let [id, ih, iw] = self.input.map(u);
+        let [od, oh, ow] = self.output.map(u);
+        let [kd, kh, kw] = self.kernel.map(u);
+        let [sd, sh, sw] = self.stride.map(u);
+        let [pd, ph, pw] = self.pad.map(u);
+        Params {
+            n: u(self.n),
+            ci: u(self.ci),
+            co: u(self.co),
+            id, ih, iw, od, oh, ow, kd, kh, kw, sd, sh, sw, pd, ph, pw,
+            has_bias: has_bias as u32,
+            total: u(total),
+        }
+    }
+}
+
+/// Mirrors `Params` in `shaders/conv.wgsl`; one block for every entry point.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    n: u32,
+    ci: u32,
+    co: u32,
+    id: u32,
+    ih: u32,
+    iw: u32,
+    od: u32,
+    oh: u32,
+    ow: u32,
+    kd: u32,
+    kh: u32,
+    kw: u32,
+    sd: u32,
+    sh: u32,
+    sw: u32,
+    pd: u32,
+    ph: u32,
+    pw: u32,
+    has_bias: u32,
+    total: u32,
+}
+
+impl Conv {
+    /// A 3D conv: kernel and stride per axis (depth, height, width).
+    pub fn conv3d(kernel: [usize; 3], stride: [usize; 3], padding: Padding) -> Conv {
+        Conv { kernel, stride, padding }
+    }
+
+    /// A 2D conv: kernel `[kh, kw]`, stride `[sh, sw]`; use [`Padding::explicit_2d`] for
+    /// explicit padding.
+    pub fn conv2d([kh, kw]: [usize; 2], [sh, sw]: [usize; 2], padding: Padding) -> Conv {
+        Conv { kernel: [1, kh, kw], stride: [1, sh, sw], padding }
+    }
+
+    /// The output shape for input `x_shape` (`NCDHW`, or `NCHW` for 2D) and weights
+    /// `w_shape` (`OIDHW` / `OIHW`). Errors if ranks, channels or kernel sizes disagree, or
+    /// the kernel does not fit the padded input.
+    pub fn output_shape(&self, x_shape: &[usize], w_shape: &[usize]) -> Result<Vec<usize>> {
+        Ok(self.geometry("conv", x_shape, w_shape)?.y_shape())
+    }
+
+    /// Resolves the shapes of a call, checking everything the kernels rely on.
+    pub(crate) fn geometry(&self, op: &str, x_shape: &[usize], w_shape: &[usize]) -> Result<Geometry> {
+        let rank = x_shape.len();
+        if rank != 4 && rank != 5 {
+            return Err(shape_err(op, format!("input has shape {x_shape:?}, expected NCDHW or NCHW")));
+        }
+        if w_shape.len() != rank {
+            return Err(shape_err(op, format!("weights {w_shape:?} and input {x_shape:?} differ in rank")));
+        }
+        if x_shape.contains(&0) || w_shape.contains(&0) || self.stride.contains(&0) || self.kernel.contains(&0) {
+            return Err(shape_err(op, format!("zero size in input {x_shape:?}, weights {w_shape:?} or {self:?}")));
+        }
+        let lift = |s: &[usize]| if rank == 4 { [1, s[2], s[3]] } else { [s[2], s[3], s[4]] };
+        let (input, wk) = (lift(x_shape), lift(w_shape));
+        if rank == 4 && (self.kernel[0] != 1 || self.stride[0] != 1) {
+            return Err(shape_err(op, format!("a 2D input {x_shape:?} needs kernel and stride depth 1, got {self:?}")));
+        }
+        if wk != self.kernel {
+            return Err(shape_err(op, format!("weights {w_shape:?} do not have kernel size {:?}", self.kernel)));
+        }
+        if w_shape[1] != x_shape[1] {
+            return Err(shape_err(
+                op,
+                format!("input {x_shape:?} has {} channels but weights {w_shape:?} expect {}", x_shape[1], w_shape[1]),
+            ));
+        }
+        let (mut output, mut pad) = ([0; 3], [0; 3]);
+        for a in 0..3 {
+            let (before, after) = self.padding.resolve(a, input[a], self.kernel[a], self.stride[a]);
+            let padded = input[a] + before + after;
+            if padded < self.kernel[a] {
+                return Err(shape_err(
+                    op,
+                    format!("kernel {:?} is larger than the padded input {x_shape:?} on axis {a}", self.kernel),
+                ));
+            }
+            output[a] = (padded - self.kernel[a]) / self.stride[a] + 1;
+            pad[a] = before;
+        }
+        if rank == 4 && output[0] != 1 {
+            return Err(shape_err(op, format!("depth padding on a 2D input {x_shape:?}: {:?}", self.padding)));
+        }
+        let (n, ci, co) = (x_shape[0], x_shape[1], w_shape[0]);
+        Ok(Geometry { n, ci, co, input, output, kernel: self.kernel, stride: self.stride, pad, rank })
+    }
+
+    /// `y = conv(x, w) + b`. `y` must have [`Conv::output_shape`]; `b`, when given, `[Cout]`.
+    pub fn forward(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        x: &Tensor,
+        w: &Tensor,
+        b: Option<&Tensor>,
+        y: &Tensor,
+    ) -> Result<()> {
+        const OP: &str = "conv_forward";
+        let g = self.geometry(OP, x.shape(), w.shape())?;
+        expect_shape(OP, "y", y, &g.y_shape())?;
+        check_bias(OP, b, g.co)?;
+        dispatch_forward(gpu, pass, &g, x, w, b, y)
+    }
+
+    /// `dx = dL/dx` from `dy = dL/dy` (shape of `y`) and the weights; `dx` has `x`'s shape.
+    pub fn backward_input(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        dy: &Tensor,
+        w: &Tensor,
+        dx: &Tensor,
+    ) -> Result<()> {
+        const OP: &str = "conv_backward_input";
+        let g = self.geometry(OP, dx.shape(), w.shape())?;
+        expect_shape(OP, "dy", dy, &g.y_shape())?;
+        dispatch_backward_input(gpu, pass, &g, dy, w, None, dx)
+    }
+
+    /// `dw = dL/dw` from the forward input `x` and `dy`; `dw` has the weights' shape.
+    pub fn backward_weight(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        x: &Tensor,
+        dy: &Tensor,
+        dw: &Tensor,
+    ) -> Result<()> {
+        const OP: &str = "conv_backward_weight";
+        let g = self.geometry(OP, x.shape(), dw.shape())?;
+        expect_shape(OP, "dy", dy, &g.y_shape())?;
+        dispatch_backward_weight(gpu, pass, &g, x, dy, dw)
+    }
+}
+
+/// `db[c] = Σ_{n, spatial} dy[n, c, ...]`: the bias gradient of a conv or transposed conv
+/// (any `[N, C, spatial...]` tensor); `db` has shape `[C]`.
+pub fn backward_bias(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, dy: &Tensor, db: &Tensor) -> Result<()> {
+    const OP: &str = "conv_backward_bias";
+    let s = dy.shape();
+    if s.len() < 3 {
+        return Err(shape_err(OP, format!("dy has shape {s:?}, expected [N, C, spatial...]")));
+    }
+    expect_rank(OP, "db", db, 1)?;
+    expect_shape(OP, "db", db, &[s[1]])?;
+    super::reduce::sum_outer_inner(gpu, pass, dy, [s[0], s[1], s[2..].iter().product()], 1.0, db)
+}
+
+/// Checks an optional bias against `channels`.
+pub(crate) fn check_bias(op: &str, b: Option<&Tensor>, channels: usize) -> Result<()> {
+    match b {
+        Some(b) => expect_shape(op, "bias", b, &[channels]),
+        None => Ok(()),
+    }
+}
+
+fn bias_arg(b: Option<&Tensor>) -> Arg<'_> {
+    b.map_or(Arg::Absent, Arg::R)
+}
+
+/// Records `conv_forward` for `g` (shapes already checked by the caller): `y = conv(x, w) + b`.
+pub(crate) fn dispatch_forward(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    x: &Tensor,
+    w: &Tensor,
+    b: Option<&Tensor>,
+    y: &Tensor,
+) -> Result<()> {
+    let total = y.numel();
+    let args = [Arg::R(x), Arg::R(w), bias_arg(b), Arg::W(y)];
+    gpu.dispatch(pass, SHADER, "conv_forward", &g.params(b.is_some(), total), &args, grid_1d(total as u64, 64)?)
+}
+
+/// Records `conv_backward_input` for `g` (shapes checked by the caller): `dx = conv^T(dy, w)
+/// + b`, the bias being added over `dx`'s channels (only the transposed conv passes one).
+pub(crate) fn dispatch_backward_input(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    dy: &Tensor,
+    w: &Tensor,
+    b: Option<&Tensor>,
+    dx: &Tensor,
+) -> Result<()> {
+    let total = dx.numel();
+    let args = [Arg::R(dy), Arg::R(w), bias_arg(b), Arg::W(dx)];
+    let params = g.params(b.is_some(), total);
+    gpu.dispatch(pass, SHADER, "conv_backward_input", &params, &args, grid_1d(total as u64, 64)?)
+}
+
+/// Records `conv_backward_weight` for `g` (shapes checked by the caller).
+pub(crate) fn dispatch_backward_weight(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    x: &Tensor,
+    dy: &Tensor,
+    dw: &Tensor,
+) -> Result<()> {
+    let total = dw.numel();
+    let args = [Arg::R(x), Arg::R(dy), Arg::W(dw)];
+    let params = g.params(false, total);
+    gpu.dispatch(pass, SHADER, "conv_backward_weight", &params, &args, grid_1d(total as u64, 64)?)
+}
