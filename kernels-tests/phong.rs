@@ -159,6 +159,11 @@ fn degenerate_pixels_give_zero_highlight_and_finite_gradients() {
             for g in &got.grads {
                 assert!(g.iter().all(|x| x.is_finite()), "shininess {shininess}, v {v:?}: gradient {g:?}");
             }
+            // At r.v = 0 the highlight contributes no gradient: the same as with no highlight.
+            let plain = one_pixel(Phong { ks: 0.0, ..ph }, v, [1.0, 0.0, 0.0], col, a, m);
+            for (g, want) in got.grads.iter().zip(&plain.grads) {
+                assert_eq!(g, want, "shininess {shininess}, v {v:?}: the highlight moved a gradient");
+            }
         }
     }
 }

@@ -8,8 +8,8 @@
 //! BCE takes probabilities, not logits: the paper's heads end in a sigmoid and the same head
 //! output also feeds Phong shading, so the probability is what the graph holds. To keep
 //! `ln` finite it clamps the prediction to `[BCE_EPS, 1 - BCE_EPS]`; like any clamp this
-//! zeroes the gradient outside that range (a saturated sigmoid gets no push from BCE, as in
-//! TensorFlow's clipped BCE the original code used).
+//! zeroes the gradient outside that range: a sigmoid saturated in f32 (exactly 0 or 1)
+//! gets no push from BCE, a trade for a finite loss.
 
 use super::{elementwise, expect_shape, reduce};
 use crate::error::{Result, shape_err};
