@@ -183,3 +183,115 @@ fn shape_errors_name_the_node_and_shapes() {
     let e = g.apply("proj", Op::Projection, &[x, w, b]).unwrap_err().to_string();
     assert!(e.contains("node 'proj'") && e.contains("[4, 7, 1, 1]") && e.contains("[1, 2, 3, 4, 5]"), "{e}");
 }
+
+/// The network, resampling first: grid + pose -> resample -> conv3d -> PReLU ->
+/// projection -> conv2d -> transposed conv2d -> sigmoid -> BCE. Gradients to every
+/// parameter, to the input grid and to the pose against finite differences of the f64
+/// references composed the same way.
+mod full_network {
+    use super::*;
+    use reference::conv::{Geom, conv, conv_transpose};
+    use reference::resample::{Dims, forward as resample_ref};
+    use rendernet::ops::{conv::{Conv, Padding}, conv_transpose::ConvTranspose};
+
+    const NB: usize = 2;
+    const G: [usize; 3] = [5, 5, 5]; // input grid
+    const R: [usize; 3] = [6, 7, 5]; // camera-aligned grid (D, H, W)
+    const C3: usize = 3; // 3D channels
+    const P: usize = 4; // projection outputs
+    const C2: usize = 3; // conv2d outputs
+    const CO: usize = 2; // image channels
+    const IMG: [usize; 2] = [14, 10]; // transposed conv s2 doubles H, W
+
+    /// Parameters in graph order: conv3d w, b, alpha, proj w, b, conv2d w, b, convT w, b.
+    const PARAMS: [(&str, &[usize]); 9] = [
+        ("c3.weight", &[C3, 1, 3, 3, 3]),
+        ("c3.bias", &[C3]),
+        ("act.alpha", &[C3]),
+        ("proj.weight", &[P, C3 * 6, 1, 1]),
+        ("proj.bias", &[P]),
+        ("c2.weight", &[C2, P, 3, 3]),
+        ("c2.bias", &[C2]),
+        ("up.weight", &[C2, CO, 4, 4]),
+        ("up.bias", &[CO]),
+    ];
+
+    fn build() -> (Graph, Value, Value, Value, Vec<Value>, Value) {
+        let mut g = Graph::new();
+        let grid = g.input("grid", &[NB, 1, G[0], G[1], G[2]]).unwrap();
+        let pose = g.input("pose", &[NB, 6]).unwrap();
+        let target = g.input("target", &[NB, CO, IMG[0], IMG[1]]).unwrap();
+        let p: Vec<Value> = PARAMS
+            .iter()
+            .map(|(n, s)| g.param(n, s, if s.len() > 1 { Init::Xavier } else { Init::Constant(0.1) }).unwrap())
+            .collect();
+        let r = g.apply("resample", Op::Resample(R), &[grid, pose]).unwrap();
+        let c3 = g.apply("c3", Op::Conv(Conv::conv3d([3, 3, 3], [1, 1, 1], Padding::Same)), &[r, p[0], p[1]]).unwrap();
+        let a = g.apply("act", Op::Prelu, &[c3, p[2]]).unwrap();
+        let pr = g.apply("proj", Op::Projection, &[a, p[3], p[4]]).unwrap();
+        let c2 = g.apply("c2", Op::Conv(Conv::conv2d([3, 3], [1, 1], Padding::Same)), &[pr, p[5], p[6]]).unwrap();
+        let up = g.apply("up", Op::ConvTranspose(ConvTranspose::conv2d([4, 4], [2, 2], Padding::Same)), &[c2, p[7], p[8]]).unwrap();
+        let s = g.apply("sig", Op::Sigmoid, &[up]).unwrap();
+        let loss = g.apply("loss", Op::Loss(Loss::Bce), &[s, target]).unwrap();
+        (g, grid, pose, target, p, loss)
+    }
+
+    fn same(len: usize, k: usize, s: usize) -> usize {
+        reference::conv::same_pads(len, k, s).1
+    }
+
+    /// The f64 loss of grid, pose and parameters `p` (in PARAMS order).
+    fn loss_ref(grid: &[f64], pose: &[f64], t: &[f64], p: &[Vec<f64>]) -> f64 {
+        let r = resample_ref(&Dims { n: NB, c: 1, inp: G, out: R }, grid, pose);
+        let g3 = Geom { n: NB, ci: 1, co: C3, input: R, output: R, kernel: [3; 3], stride: [1; 3], before: [1; 3] };
+        let c3 = conv(&g3, &r, &p[0], Some(&p[1]));
+        let a = act::prelu(&c3, &p[2], C3, R.iter().product());
+        let pr = proj_ref(&a, &p[3], &p[4], NB, C3 * R[0], P, R[1] * R[2]);
+        let hw = [1, R[1], R[2]];
+        let g2 = Geom { n: NB, ci: P, co: C2, input: hw, output: hw, kernel: [1, 3, 3], stride: [1; 3], before: [0, 1, 1] };
+        let c2 = conv(&g2, &pr, &p[5], Some(&p[6]));
+        let before = [0, same(IMG[0], 4, 2), same(IMG[1], 4, 2)];
+        let gt = Geom { n: NB, ci: C2, co: CO, input: hw, output: [1, IMG[0], IMG[1]], kernel: [1, 4, 4], stride: [1, 2, 2], before };
+        let up = conv_transpose(&gt, &c2, &p[7], Some(&p[8]));
+        lref::bce(&act::sigmoid(&up), t, 1e-7, 1.0 - 1e-7)
+    }
+
+    #[test]
+    fn gradients_to_params_grid_and_pose_match_finite_differences() {
+        let (g, grid_v, pose_v, target_v, params, loss) = build();
+        let mut ex = Executor::new(gpu(), g, 11).unwrap();
+        let mut rng = Rng(21);
+        let grid = f32_round(&rng.vec(NB * G.iter().product::<usize>(), 0.0, 1.0));
+        let pose = f32_round(&[0.9, 0.3, -0.2, 0.2, -0.1, 0.15, 1.1, -0.7, 0.4, -0.2, 0.1, 0.05]);
+        let t = f32_round(&rng.vec(NB * CO * IMG[0] * IMG[1], 0.0, 1.0));
+        ex.feed(gpu(), grid_v, &f32v(&grid)).unwrap();
+        ex.feed(gpu(), pose_v, &f32v(&pose)).unwrap();
+        ex.feed(gpu(), target_v, &f32v(&t)).unwrap();
+        ex.want_grad(grid_v);
+        ex.want_grad(pose_v);
+        ex.training = false;
+        let stats = ex.backward(gpu(), loss).unwrap();
+        assert_eq!(stats.submits, 1);
+        let p: Vec<Vec<f64>> = params.iter().map(|&v| read64(&ex, v)).collect();
+        let l = read64(&ex, loss)[0];
+        assert!((l - loss_ref(&grid, &pose, &t, &p)).abs() < 1e-5, "loss {l}");
+        // Gradients of a mean over 560 pixels are ~1e-3; f32 chains of a few hundred terms
+        // keep errors near 1e-4 relative, so rtol 2e-3 with atol at 1e-3 of the largest
+        // gradient leaves 10x headroom while a dropped term or a flipped sign fails.
+        let check = |what: &str, got: Vec<f64>, want: Vec<f64>| {
+            let scale = want.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            assert_close(what, &got, &want, 1e-3 * scale, 2e-3);
+        };
+        check("d/d grid", grad64(&ex, grid_v), fd_grad(&grid, |x| loss_ref(x, &pose, &t, &p)));
+        check("d/d pose", grad64(&ex, pose_v), fd_grad(&pose, |x| loss_ref(&grid, x, &t, &p)));
+        for (k, &v) in params.iter().enumerate() {
+            let want = fd_grad(&p[k], |x| {
+                let mut q = p.clone();
+                q[k] = x.to_vec();
+                loss_ref(&grid, &pose, &t, &q)
+            });
+            check(PARAMS[k].0, grad64(&ex, v), want);
+        }
+        assert!(stats.peak_bytes < stats.tensor_bytes, "memory planning reused nothing: {stats:?}");
+    }
+}

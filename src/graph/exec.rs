@@ -196,12 +196,12 @@ impl Executor {
                 let pos = 2 * f - 1 - k;
                 let (ins, out) = n.op.saves();
                 for &j in ins {
-                    last[n.inputs[j].0] = pos;
+                    last[n.inputs[j].0] = last[n.inputs[j].0].max(pos);
                 }
                 if out {
-                    last[n.output.0] = pos;
+                    last[n.output.0] = last[n.output.0].max(pos);
                 }
-                last_grad[n.output.0] = pos;
+                last_grad[n.output.0] = last_grad[n.output.0].max(pos);
             }
         }
         // Free what the previous run kept for reading: it has been read or never will be.

@@ -9,13 +9,15 @@
 //! | `Dropout` | x | nothing (the mask is a function of the seed) |
 //! | `Add` | a, b | nothing |
 //! | `Projection` | x[N,C,D,H,W], w[O,C*D,1,1], b[O] | x, w |
+//! | `Conv(c)` | x, w[O,I,k..], b[O] | x, w |
+//! | `ConvTranspose(c)` | x, w[I,O,k..], b[O] | x, w |
 //! | `Resample(out)` | x[N,C,D,H,W], pose[N,6] | x, pose |
 //! | `Phong` | normal[N,3,H,W], albedo[N,C,H,W], mask[N,1,H,W], light[N,6] | all four |
 //! | `Loss` | prediction, target (no gradient) | both |
 
 use crate::error::{Result, shape_err};
 use crate::gpu::{Gpu, Tensor};
-use crate::ops::{self, dropout::Dropout, loss::Loss, phong::Phong};
+use crate::ops::{self, conv::Conv, conv_transpose::ConvTranspose, dropout::Dropout, loss::Loss, phong::Phong};
 
 /// An op in a graph, with its configuration.
 #[derive(Clone, Debug)]
@@ -32,6 +34,10 @@ pub enum Op {
     Add,
     /// Projection unit: fold depth into channels, 1x1 conv with bias.
     Projection,
+    /// 3D or 2D convolution with bias.
+    Conv(Conv),
+    /// 3D or 2D transposed convolution with bias (output size from its padding rule).
+    ConvTranspose(ConvTranspose),
     /// Rigid-body resampling of a grid into a camera-aligned grid of spatial size `[Do, Ho, Wo]`.
     Resample([usize; 3]),
     /// Phong shading of predicted normal/albedo/mask maps under an input light.
@@ -59,6 +65,8 @@ impl Op {
             Op::Dropout(_) => "dropout",
             Op::Add => "add",
             Op::Projection => "projection",
+            Op::Conv(_) => "conv",
+            Op::ConvTranspose(_) => "conv_transpose",
             Op::Resample(_) => "resample",
             Op::Phong(_) => "phong",
             Op::Loss(Loss::Mse) => "mse",
@@ -70,7 +78,7 @@ impl Op {
         match self {
             Op::Sigmoid | Op::Elu(_) | Op::Dropout(_) => 1,
             Op::Prelu | Op::Add | Op::Loss(_) | Op::Resample(_) => 2,
-            Op::Projection => 3,
+            Op::Projection | Op::Conv(_) | Op::ConvTranspose(_) => 3,
             Op::Phong(_) => 4,
         }
     }
@@ -101,6 +109,8 @@ impl Op {
                 }
                 Ok(d.output_shape())
             }
+            Op::Conv(c) => with_bias(c.output_shape(s[0], s[1])?, s[2]),
+            Op::ConvTranspose(c) => with_bias(c.output_shape(s[0], s[1])?, s[2]),
             Op::Resample([d, h, w]) => {
                 if s[0].len() != 5 || s[1] != [s[0][0], 6] {
                     return Err(shape_err("resample", "needs a grid [N,C,D,H,W] and a pose [N,6]"));
@@ -138,7 +148,7 @@ impl Op {
             Op::Prelu => (&[0, 1], false),
             Op::Dropout(_) | Op::Add => (&[], false),
             Op::Projection => (&[0, 1], false),
-            Op::Resample(_) => (&[0, 1], false),
+            Op::Resample(_) | Op::Conv(_) | Op::ConvTranspose(_) => (&[0, 1], false),
             Op::Phong(_) => (&[0, 1, 2, 3], false),
             Op::Loss(_) => (&[0, 1], false),
         }
@@ -161,6 +171,8 @@ impl Op {
             Op::Dropout(_) => self.dropout(c.training).forward(g, p, c.seed, x[0], y),
             Op::Add => ops::add::forward(g, p, x[0], x[1], y),
             Op::Projection => ops::projection::forward(g, p, x[0], x[1], x[2], y),
+            Op::Conv(cv) => cv.forward(g, p, x[0], x[1], Some(x[2]), y),
+            Op::ConvTranspose(cv) => cv.forward(g, p, x[0], x[1], Some(x[2]), y),
             Op::Resample(_) => ops::resample::forward(g, p, x[0], x[1], y),
             Op::Phong(ph) => ph.forward(g, p, &phong_inputs(x), y),
             Op::Loss(l) => l.forward(g, p, x[0], x[1], y),
@@ -193,6 +205,16 @@ impl Op {
                 some(dx[1], |d| ops::projection::backward_weight(g, p, x[0], dy, d))?;
                 some(dx[2], |d| ops::projection::backward_bias(g, p, dy, d))
             }
+            Op::Conv(cv) => {
+                some(dx[0], |d| cv.backward_input(g, p, dy, x[1], d))?;
+                some(dx[1], |d| cv.backward_weight(g, p, x[0], dy, d))?;
+                some(dx[2], |d| ops::conv::backward_bias(g, p, dy, d))
+            }
+            Op::ConvTranspose(cv) => {
+                some(dx[0], |d| cv.backward_input(g, p, dy, x[1], d))?;
+                some(dx[1], |d| cv.backward_weight(g, p, x[0], dy, d))?;
+                some(dx[2], |d| cv.backward_bias(g, p, dy, d))
+            }
             Op::Resample(_) => {
                 some(dx[0], |d| ops::resample::backward_input(g, p, x[1], dy, d))?;
                 some(dx[1], |d| ops::resample::backward_pose(g, p, x[0], x[1], dy, d))
@@ -205,6 +227,14 @@ impl Op {
             Op::Loss(l) => some(dx[0], |d| l.backward(g, p, x[0], x[1], dy, d)),
         }
     }
+}
+
+/// A conv's output shape once its bias `[O]` is checked against it.
+fn with_bias(out: Vec<usize>, b: &[usize]) -> Result<Vec<usize>> {
+    if b != [out[1]] {
+        return Err(shape_err("conv", format!("bias must be [{}]", out[1])));
+    }
+    Ok(out)
 }
 
 fn phong_inputs<'a>(x: &[&'a Tensor]) -> ops::phong::Inputs<'a> {
