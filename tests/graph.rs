@@ -295,3 +295,11 @@ mod full_network {
         assert!(stats.peak_bytes < stats.tensor_bytes, "memory planning reused nothing: {stats:?}");
     }
 }
+
+#[test]
+fn exponential_decay_matches_the_original_schedule() {
+    use rendernet::graph::schedule::exponential_decay;
+    assert_eq!(exponential_decay(1e-5, 0.96, 1000, 0, true), 1e-5);
+    assert!((exponential_decay(1.0, 0.96, 1000, 2500, true) - 0.96f32.powi(2)).abs() < 1e-7);
+    assert!((exponential_decay(1.0, 0.96, 1000, 2500, false) - 0.96f32.powf(2.5)).abs() < 1e-6);
+}
