@@ -68,14 +68,35 @@ fn albedo_at(g: vec3<f32>) -> vec3<f32> {
     return acc / wsum;
 }
 
-// Outward normal (grid frame = object frame up to scale): minus the field's gradient, by
-// central differences one voxel wide, which smooths the trilinear field's kinks at cell faces.
+// Cubic B-spline weights (x) and their derivatives (y) for the four taps at offsets -1..2.
+fn bspline(t: f32, k: u32) -> vec2<f32> {
+    let s = 1.0 - t;
+    switch k {
+        case 0u: { return vec2<f32>(s * s * s / 6.0, -0.5 * s * s); }
+        case 1u: { return vec2<f32>((3.0 * t * t * t - 6.0 * t * t + 4.0) / 6.0, 0.5 * (3.0 * t * t - 4.0 * t)); }
+        case 2u: { return vec2<f32>((-3.0 * t * t * t + 3.0 * t * t + 3.0 * t + 1.0) / 6.0, 0.5 * (-3.0 * t * t + 2.0 * t + 1.0)); }
+        default: { return vec2<f32>(t * t * t / 6.0, 0.5 * t * t); }
+    }
+}
+
+// Outward normal (grid frame = object frame up to scale): minus the gradient of the cubic
+// B-spline smoothing of the voxels (4^3 taps). Differencing the trilinear field instead
+// gives faceted normals, and with a one-voxel ramp its one-voxel central differences clamp
+// and bend towards the diagonals (28.8 dB on the analytic sphere against 35+).
 fn normal_at(g: vec3<f32>) -> vec3<f32> {
-    let e = vec2<f32>(1.0, 0.0);
-    let grad = vec3<f32>(
-        field(g + e.xyy) - field(g - e.xyy),
-        field(g + e.yxy) - field(g - e.yxy),
-        field(g + e.yyx) - field(g - e.yyx));
+    let b = floor(g);
+    let f = g - b;
+    let bi = vec3<i32>(b) - vec3<i32>(1);
+    var grad = vec3<f32>(0.0);
+    for (var c = 0u; c < 64u; c++) {
+        let o = vec3<u32>(c & 3u, (c >> 2u) & 3u, (c >> 4u) & 3u);
+        let v = voxel(bi + vec3<i32>(o));
+        if (v == 0.0) { continue; }
+        let wx = bspline(f.x, o.x);
+        let wy = bspline(f.y, o.y);
+        let wz = bspline(f.z, o.z);
+        grad += v * vec3<f32>(wx.y * wy.x * wz.x, wx.x * wy.y * wz.x, wx.x * wy.x * wz.y);
+    }
     let l = length(grad);
     if (l <= 1e-12) { return vec3<f32>(0.0, 0.0, 1.0); }
     return -grad / l;

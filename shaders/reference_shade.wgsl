@@ -11,6 +11,8 @@ struct Params {
     ks: f32, shininess: f32,
     depth_jump: f32, // depth difference (object units) that marks an occluding contour
     crease_cos: f32, // neighbouring normals with a smaller cosine mark a crease
+    crease_step: i32, // sub-pixels between the normals compared: half a voxel or one pixel,
+                      // as the smoothed normals turn over a voxel or two, not over one pixel
 }
 @group(0) @binding(0) var<uniform> p: Params;
 @group(0) @binding(1) var<storage, read> gbuf: array<f32>;
@@ -28,8 +30,8 @@ fn normal(x: i32, y: i32) -> vec3<f32> {
 }
 
 // Whether a hit sub-pixel lies on a line: a neighbour one output pixel away (ss sub-pixels)
-// is background (silhouette), lies behind by more than depth_jump (occluding contour), or
-// faces a clearly different way (crease).
+// is background (silhouette) or lies behind by more than depth_jump (occluding contour), or
+// one crease_step away faces a clearly different way (crease).
 fn on_line(x: i32, y: i32) -> bool {
     let s = i32(p.ss);
     let z = g(1u, x, y);
@@ -43,7 +45,9 @@ fn on_line(x: i32, y: i32) -> bool {
         if (qx < 0 || qy < 0 || qx >= nn || qy >= nn) { continue; }
         if (g(0u, qx, qy) == 0.0) { return true; }
         if (z - g(1u, qx, qy) > p.depth_jump) { return true; }
-        if (dot(n, normal(qx, qy)) < p.crease_cos) { return true; }
+        let cx = clamp(x + dx / s * p.crease_step, 0, nn - 1);
+        let cy = clamp(y + dy / s * p.crease_step, 0, nn - 1);
+        if (g(0u, cx, cy) != 0.0 && dot(n, normal(cx, cy)) < p.crease_cos) { return true; }
     }
     return false;
 }

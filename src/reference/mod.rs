@@ -112,7 +112,8 @@ pub struct Options {
     pub ao_dirs_sqrt: u32,
     /// Ambient-occlusion ray length in object units (the unit cube is the grid).
     pub ao_radius: f32,
-    /// Neighbouring normals more than this many degrees apart mark a crease line.
+    /// Normals half a voxel (at least one pixel) apart that differ by more than this many
+    /// degrees mark a crease line.
     pub crease_degrees: f32,
     /// A neighbour farther by more than this many pixel widths marks an occluding contour.
     pub depth_jump_pixels: f32,
@@ -125,7 +126,7 @@ impl Default for Options {
             step: 0.5,
             ao_dirs_sqrt: 8,
             ao_radius: 0.12,
-            crease_degrees: 35.0,
+            crease_degrees: 30.0,
             depth_jump_pixels: 4.0,
         }
     }
@@ -182,6 +183,7 @@ struct ShadeParams {
     shininess: f32,
     depth_jump: f32,
     crease_cos: f32,
+    crease_step: i32,
 }
 
 /// The reference renderer. Holds only settings; pipelines live in the [`Gpu`]'s cache.
@@ -239,7 +241,8 @@ impl Renderer {
         }
         view.validate().map_err(|m| Error::Invalid(format!("{op}: view: {m}")))?;
         light.validate().map_err(|m| Error::Invalid(format!("{op}: light: {m}")))?;
-        if !(1..=8).contains(&o.supersample) || !(o.step > 0.0 && o.step <= 2.0) || o.ao_dirs_sqrt == 0 {
+        let step_ok = o.step > 0.0 && o.step <= 2.0;
+        if !(1..=8).contains(&o.supersample) || !step_ok || o.ao_dirs_sqrt == 0 || !o.ao_radius.is_finite() {
             return Err(Error::Invalid(format!("{op}: options {o:?} out of range (supersample 1..=8, step in (0, 2], ao_dirs_sqrt >= 1)")));
         }
         let size = shape[1] as u32;
@@ -278,6 +281,9 @@ impl Renderer {
             shininess: light.shininess,
             depth_jump: o.depth_jump_pixels * fov / size as f32,
             crease_cos: o.crease_degrees.to_radians().cos(),
+            // Half a voxel's width in sub-pixels (at least one output pixel): wider spacing
+            // would let thin parts (one-voxel legs) compare their two sides.
+            crease_step: ((0.5 * n as f32 / (fov * unit)).round() as i32).max(o.supersample as i32),
         };
         let wg = [size.div_ceil(8), size.div_ceil(8), 1];
         gpu.dispatch(pass, SHADE, "reference_shade", &sp, &[Arg::R(&gbuf), Arg::W(out)], wg)
