@@ -125,7 +125,7 @@ impl Default for Options {
             supersample: 1,
             step: 0.5,
             ao_dirs_sqrt: 8,
-            ao_radius: 0.12,
+            ao_radius: 0.2,
             crease_degrees: 30.0,
             depth_jump_pixels: 4.0,
         }
