@@ -13,6 +13,7 @@ pub mod error;
 pub mod gpu;
 pub mod graph;
 pub mod ops;
+pub mod reference;
 pub mod voxel;
 
 pub use error::{Error, Result};

@@ -18,6 +18,11 @@ enum Cmd {
     /// Print the GPU adapter, backend and the limits that matter. Honours WGPU_BACKEND
     /// (vulkan, metal, dx12, gl) and WGPU_ADAPTER_NAME (substring of the adapter name).
     Info,
+    /// Render one ground-truth image with the reference renderer (the images RenderNet learns
+    /// to imitate): a voxel file, a mesh (voxelised), or a procedural shape, seen from an
+    /// orthographic camera at the given pose and shaded by --shader. With neither --voxels
+    /// nor --shape it renders the built-in default, procedural chair seed 0 at 64^3.
+    Truth(cli::truth::TruthArgs),
 }
 
 fn main() -> ExitCode {
@@ -29,6 +34,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let r = match cli.cmd {
         Cmd::Info => cli::info::run(),
+        Cmd::Truth(a) => cli::truth::run(a),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,3 +1,4 @@
 //! Subcommand implementations: parse, call the library, report.
 
 pub mod info;
+pub mod truth;

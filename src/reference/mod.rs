@@ -1,0 +1,291 @@
+//! The conventional renderer RenderNet learns to imitate: ground-truth images of a voxel
+//! grid's smooth surface, on the GPU.
+//!
+//! The surface is the 0.5 iso-surface of the trilinearly interpolated occupancy (voxel
+//! centres at integer grid coordinates, 0 outside the grid), found per pixel by an
+//! orthographic ray march (fixed step, then bisection at the first crossing); normals come
+//! from the central-difference gradient of the same field. For smoother ground truth pass a
+//! finer grid than the network sees (e.g. 4x, from [`crate::voxel::Shape::to_grid`] or the
+//! voxeliser): the object frame is resolution-independent, so the image does not change size.
+//!
+//! Two compute passes in one submit: `shaders/reference_march.wgsl` writes a G-buffer
+//! (mask, depth, normal, albedo, ambient occlusion) at `size * supersample` pixels, and
+//! `shaders/reference_shade.wgsl` shades it per [`Shader`] and averages the sub-pixels.
+//! The camera and light conventions are in [`camera`]. The background is 0 (black) in every
+//! output except [`Shader::Contour`], which draws black lines on white.
+
+pub mod camera;
+mod image;
+
+pub use camera::{Light, View};
+pub use image::Image;
+
+use crate::error::{Error, Result};
+use crate::gpu::{self, Arg, Gpu, Tensor};
+use crate::voxel::VoxelGrid;
+
+const MARCH: gpu::Shader =
+    gpu::Shader { name: "reference_march", source: include_str!("../../shaders/reference_march.wgsl") };
+const SHADE: gpu::Shader =
+    gpu::Shader { name: "reference_shade", source: include_str!("../../shaders/reference_shade.wgsl") };
+
+/// G-buffer channels written by the march pass.
+const GBUF_CHANNELS: usize = 9;
+
+/// What the reference renderer outputs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Shader {
+    /// Phong shading with a specular term, RGB (see [`Light`]).
+    Phong,
+    /// Surface colour: 1 (white) or the grid's interpolated colour, RGB.
+    Albedo,
+    /// Camera-frame unit normal encoded `(n + 1) / 2` (x right, y up, z towards the camera), RGB.
+    Normal,
+    /// `(1 + z) / 2` of the hit's camera-frame `z` (object units, towards the camera): nearer
+    /// is brighter, the object's range is within `(0.07, 0.93)`, background 0. Grey.
+    Depth,
+    /// Coverage: 1 where the ray hits (fractional at edges when supersampled). Grey.
+    Mask,
+    /// Four-band diffuse (0, 1/3, 2/3, 1 of the diffuse term) plus black outlines, RGB.
+    Toon,
+    /// Occluding contours and creases as black lines on white. Grey.
+    Contour,
+    /// Ambient occlusion, 1 = unoccluded: 64 stratified cosine-weighted directions, each
+    /// marched a short way (deterministic, noise-free). Grey.
+    AmbientOcclusion,
+}
+
+impl Shader {
+    /// Every shader, in a fixed order.
+    pub const ALL: [Shader; 8] = [
+        Shader::Phong,
+        Shader::Albedo,
+        Shader::Normal,
+        Shader::Depth,
+        Shader::Mask,
+        Shader::Toon,
+        Shader::Contour,
+        Shader::AmbientOcclusion,
+    ];
+
+    /// Output channels: 3 (RGB) or 1 (grey).
+    pub fn channels(self) -> usize {
+        match self {
+            Shader::Phong | Shader::Albedo | Shader::Normal | Shader::Toon => 3,
+            _ => 1,
+        }
+    }
+
+    /// Short lowercase name, as the CLI spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Shader::Phong => "phong",
+            Shader::Albedo => "albedo",
+            Shader::Normal => "normal",
+            Shader::Depth => "depth",
+            Shader::Mask => "mask",
+            Shader::Toon => "toon",
+            Shader::Contour => "contour",
+            Shader::AmbientOcclusion => "ao",
+        }
+    }
+
+    /// Parses a [`Shader::name`] (also accepts `ambient-occlusion`).
+    pub fn parse(s: &str) -> Option<Shader> {
+        let s = s.to_ascii_lowercase();
+        Shader::ALL.into_iter().find(|sh| sh.name() == s).or((s == "ambient-occlusion").then_some(Shader::AmbientOcclusion))
+    }
+
+    fn mode(self) -> u32 {
+        Shader::ALL.iter().position(|&s| s == self).unwrap() as u32
+    }
+}
+
+/// Quality settings; the defaults suit ground truth at the paper's resolutions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Options {
+    /// Sub-pixels per axis averaged into each pixel (1 = one ray through the pixel centre).
+    pub supersample: u32,
+    /// March step in voxels (the bisection then refines the crossing to ~1/1000 of a step).
+    pub step: f32,
+    /// Ambient-occlusion rays: `ao_dirs_sqrt^2` stratified directions.
+    pub ao_dirs_sqrt: u32,
+    /// Ambient-occlusion ray length in object units (the unit cube is the grid).
+    pub ao_radius: f32,
+    /// Normals half a voxel (at least one pixel) apart that differ by more than this many
+    /// degrees mark a crease line.
+    pub crease_degrees: f32,
+    /// A neighbour farther by more than this many pixel widths marks an occluding contour.
+    pub depth_jump_pixels: f32,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            supersample: 1,
+            step: 0.5,
+            ao_dirs_sqrt: 8,
+            ao_radius: 0.2,
+            crease_degrees: 30.0,
+            depth_jump_pixels: 4.0,
+        }
+    }
+}
+
+/// A grid uploaded to the GPU, reusable across many views.
+pub struct GpuGrid {
+    dims: [usize; 3],
+    occupancy: Tensor,
+    colour: Option<Tensor>,
+}
+
+impl GpuGrid {
+    /// Uploads occupancy `[D, H, W]` and, when present, colour `[3, D, H, W]`.
+    pub fn upload(gpu: &Gpu, grid: &VoxelGrid) -> Result<GpuGrid> {
+        let dims = grid.dims();
+        let occupancy = Tensor::from_slice(gpu, &dims, grid.occupancy())?;
+        let colour = match grid.colour() {
+            Some(c) => Some(Tensor::from_slice(gpu, &[3, dims[0], dims[1], dims[2]], c)?),
+            None => None,
+        };
+        Ok(GpuGrid { dims, occupancy, colour })
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct MarchParams {
+    dims: [u32; 3],
+    size: u32,
+    has_colour: u32,
+    want_ao: u32,
+    ao_dirs_sqrt: u32,
+    ao_steps: u32,
+    r: [f32; 9],
+    fov: f32,
+    unit: f32,
+    step: f32,
+    ao_radius: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ShadeParams {
+    size: u32,
+    ss: u32,
+    mode: u32,
+    channels: u32,
+    light: [f32; 3],
+    ambient: f32,
+    colour: [f32; 3],
+    kd: f32,
+    ks: f32,
+    shininess: f32,
+    depth_jump: f32,
+    crease_cos: f32,
+    crease_step: i32,
+}
+
+/// The reference renderer. Holds only settings; pipelines live in the [`Gpu`]'s cache.
+#[derive(Clone, Debug, Default)]
+pub struct Renderer {
+    /// Quality settings used by every render.
+    pub options: Options,
+}
+
+impl Renderer {
+    /// A renderer with default [`Options`] (one ray per pixel).
+    pub fn new(_gpu: &Gpu) -> Renderer {
+        Renderer { options: Options::default() }
+    }
+
+    /// The same renderer with other options.
+    pub fn with_options(mut self, options: Options) -> Renderer {
+        self.options = options;
+        self
+    }
+
+    /// Renders `grid` as `size x size` pixels: uploads it, records both passes into one
+    /// submit and reads the image back.
+    pub fn render(&self, gpu: &Gpu, grid: &VoxelGrid, view: &View, light: &Light, shader: Shader, size: u32) -> Result<Image> {
+        if size == 0 {
+            return Err(Error::Invalid("reference::render: image size must be at least 1".into()));
+        }
+        let g = GpuGrid::upload(gpu, grid)?;
+        let out = Tensor::zeros(gpu, &[shader.channels(), size as usize, size as usize])?;
+        gpu.run(|pass| self.record(gpu, pass, &g, view, light, shader, &out))?;
+        Ok(Image { channels: shader.channels(), size: size as usize, data: out.to_vec(gpu)? })
+    }
+
+    /// Records a render into `pass`, writing `out` (`[C, S, S]`, `C` = [`Shader::channels`]),
+    /// so a dataset generator can batch many views into one submit.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        grid: &GpuGrid,
+        view: &View,
+        light: &Light,
+        shader: Shader,
+        out: &Tensor,
+    ) -> Result<()> {
+        let op = "reference::render";
+        let o = &self.options;
+        let shape = out.shape();
+        if shape.len() != 3 || shape[0] != shader.channels() || shape[1] != shape[2] {
+            return Err(crate::error::shape_err(
+                op,
+                format!("out has shape {shape:?}, expected [{}, S, S] for {:?}", shader.channels(), shader),
+            ));
+        }
+        view.validate().map_err(|m| Error::Invalid(format!("{op}: view: {m}")))?;
+        light.validate().map_err(|m| Error::Invalid(format!("{op}: light: {m}")))?;
+        let step_ok = o.step > 0.0 && o.step <= 2.0;
+        if !(1..=8).contains(&o.supersample) || !step_ok || o.ao_dirs_sqrt == 0 || !o.ao_radius.is_finite() {
+            return Err(Error::Invalid(format!("{op}: options {o:?} out of range (supersample 1..=8, step in (0, 2], ao_dirs_sqrt >= 1)")));
+        }
+        let size = shape[1] as u32;
+        let n = size * o.supersample;
+        let gbuf = Tensor::zeros(gpu, &[GBUF_CHANNELS, n as usize, n as usize])?;
+        let unit = *grid.dims.iter().max().unwrap() as f32;
+        let fov = view.fov() as f32;
+        let r = view.rotation().transpose().to_cols_array(); // rows of R, row-major
+        let mp = MarchParams {
+            dims: grid.dims.map(|d| d as u32),
+            size: n,
+            has_colour: grid.colour.is_some() as u32,
+            want_ao: (shader == Shader::AmbientOcclusion) as u32,
+            ao_dirs_sqrt: o.ao_dirs_sqrt,
+            ao_steps: 8,
+            r,
+            fov,
+            unit,
+            step: o.step,
+            ao_radius: o.ao_radius * unit,
+        };
+        let colour = grid.colour.as_ref().map(Arg::R).unwrap_or(Arg::Absent);
+        let wg = [n.div_ceil(8), n.div_ceil(8), 1];
+        gpu.dispatch(pass, MARCH, "reference_march", &mp, &[Arg::R(&grid.occupancy), colour, Arg::W(&gbuf)], wg)?;
+        let l = light.direction();
+        let sp = ShadeParams {
+            size,
+            ss: o.supersample,
+            mode: shader.mode(),
+            channels: shader.channels() as u32,
+            light: l.to_array(),
+            ambient: light.ambient,
+            colour: light.colour,
+            kd: light.kd,
+            ks: light.ks,
+            shininess: light.shininess,
+            depth_jump: o.depth_jump_pixels * fov / size as f32,
+            crease_cos: o.crease_degrees.to_radians().cos(),
+            // Half a voxel's width in sub-pixels (at least one output pixel): wider spacing
+            // would let thin parts (one-voxel legs) compare their two sides.
+            crease_step: ((0.5 * n as f32 / (fov * unit)).round() as i32).max(o.supersample as i32),
+        };
+        let wg = [size.div_ceil(8), size.div_ceil(8), 1];
+        gpu.dispatch(pass, SHADE, "reference_shade", &sp, &[Arg::R(&gbuf), Arg::W(out)], wg)
+    }
+}
