@@ -12,6 +12,7 @@
 pub mod error;
 pub mod gpu;
 pub mod graph;
+pub mod nn;
 pub mod ops;
 pub mod reference;
 pub mod voxel;
