@@ -15,6 +15,7 @@ pub mod graph;
 pub mod nn;
 pub mod ops;
 pub mod reference;
+pub mod train;
 pub mod voxel;
 
 pub use error::{Error, Result};

@@ -2,3 +2,4 @@
 //! tie its resampling to the reference renderer's images.
 
 pub mod camera;
+pub mod rendernet;
