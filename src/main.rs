@@ -23,6 +23,9 @@ enum Cmd {
     /// orthographic camera at the given pose and shaded by --shader. With neither --voxels
     /// nor --shape it renders the built-in default, procedural chair seed 0 at 64^3.
     Truth(cli::truth::TruthArgs),
+    /// Generate a deterministic, sharded training/test set (input grids, poses, lights and
+    /// reference-rendered targets) with a manifest; see datasets/README.md.
+    Dataset(cli::dataset::DatasetArgs),
 }
 
 fn main() -> ExitCode {
@@ -35,6 +38,7 @@ fn main() -> ExitCode {
     let r = match cli.cmd {
         Cmd::Info => cli::info::run(),
         Cmd::Truth(a) => cli::truth::run(a),
+        Cmd::Dataset(a) => cli::dataset::run(a),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

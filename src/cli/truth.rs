@@ -51,7 +51,7 @@ pub struct TruthArgs {
     out: PathBuf,
 }
 
-fn parse_shader(s: &str) -> std::result::Result<Shader, String> {
+pub(crate) fn parse_shader(s: &str) -> std::result::Result<Shader, String> {
     Shader::parse(s).ok_or_else(|| {
         let names: Vec<_> = Shader::ALL.iter().map(|s| s.name()).collect();
         format!("unknown shader '{s}'; expected one of {}", names.join(", "))

@@ -230,14 +230,36 @@ impl Renderer {
         shader: Shader,
         out: &Tensor,
     ) -> Result<()> {
+        self.record_many(gpu, pass, grid, view, light, &[(shader, out)])
+    }
+
+    /// Like [`Renderer::record`] for several shaders of one view: the G-buffer is marched once
+    /// and shaded per output, so e.g. Phong, normal, albedo and mask cost one march, not four.
+    /// Every output must have the same size `S`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_many(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        grid: &GpuGrid,
+        view: &View,
+        light: &Light,
+        outs: &[(Shader, &Tensor)],
+    ) -> Result<()> {
         let op = "reference::render";
         let o = &self.options;
-        let shape = out.shape();
-        if shape.len() != 3 || shape[0] != shader.channels() || shape[1] != shape[2] {
-            return Err(crate::error::shape_err(
-                op,
-                format!("out has shape {shape:?}, expected [{}, S, S] for {:?}", shader.channels(), shader),
-            ));
+        let Some(&(_, first)) = outs.first() else {
+            return Err(Error::Invalid(format!("{op}: no outputs requested")));
+        };
+        let size = first.shape().get(1).copied().unwrap_or(0);
+        for &(shader, out) in outs {
+            let shape = out.shape();
+            if shape.len() != 3 || shape[0] != shader.channels() || shape[1] != size || shape[2] != size {
+                return Err(crate::error::shape_err(
+                    op,
+                    format!("out has shape {shape:?}, expected [{}, {size}, {size}] for {:?}", shader.channels(), shader),
+                ));
+            }
         }
         view.validate().map_err(|m| Error::Invalid(format!("{op}: view: {m}")))?;
         light.validate().map_err(|m| Error::Invalid(format!("{op}: light: {m}")))?;
@@ -245,7 +267,7 @@ impl Renderer {
         if !(1..=8).contains(&o.supersample) || !step_ok || o.ao_dirs_sqrt == 0 || !o.ao_radius.is_finite() {
             return Err(Error::Invalid(format!("{op}: options {o:?} out of range (supersample 1..=8, step in (0, 2], ao_dirs_sqrt >= 1)")));
         }
-        let size = shape[1] as u32;
+        let size = size as u32;
         let n = size * o.supersample;
         let gbuf = Tensor::zeros(gpu, &[GBUF_CHANNELS, n as usize, n as usize])?;
         let unit = *grid.dims.iter().max().unwrap() as f32;
@@ -255,7 +277,7 @@ impl Renderer {
             dims: grid.dims.map(|d| d as u32),
             size: n,
             has_colour: grid.colour.is_some() as u32,
-            want_ao: (shader == Shader::AmbientOcclusion) as u32,
+            want_ao: outs.iter().any(|&(s, _)| s == Shader::AmbientOcclusion) as u32,
             ao_dirs_sqrt: o.ao_dirs_sqrt,
             ao_steps: 8,
             r,
@@ -268,24 +290,27 @@ impl Renderer {
         let wg = [n.div_ceil(8), n.div_ceil(8), 1];
         gpu.dispatch(pass, MARCH, "reference_march", &mp, &[Arg::R(&grid.occupancy), colour, Arg::W(&gbuf)], wg)?;
         let l = light.direction();
-        let sp = ShadeParams {
-            size,
-            ss: o.supersample,
-            mode: shader.mode(),
-            channels: shader.channels() as u32,
-            light: l.to_array(),
-            ambient: light.ambient,
-            colour: light.colour,
-            kd: light.kd,
-            ks: light.ks,
-            shininess: light.shininess,
-            depth_jump: o.depth_jump_pixels * fov / size as f32,
-            crease_cos: o.crease_degrees.to_radians().cos(),
-            // Half a voxel's width in sub-pixels (at least one output pixel): wider spacing
-            // would let thin parts (one-voxel legs) compare their two sides.
-            crease_step: ((0.5 * n as f32 / (fov * unit)).round() as i32).max(o.supersample as i32),
-        };
-        let wg = [size.div_ceil(8), size.div_ceil(8), 1];
-        gpu.dispatch(pass, SHADE, "reference_shade", &sp, &[Arg::R(&gbuf), Arg::W(out)], wg)
+        for &(shader, out) in outs {
+            let sp = ShadeParams {
+                size,
+                ss: o.supersample,
+                mode: shader.mode(),
+                channels: shader.channels() as u32,
+                light: l.to_array(),
+                ambient: light.ambient,
+                colour: light.colour,
+                kd: light.kd,
+                ks: light.ks,
+                shininess: light.shininess,
+                depth_jump: o.depth_jump_pixels * fov / size as f32,
+                crease_cos: o.crease_degrees.to_radians().cos(),
+                // Half a voxel's width in sub-pixels (at least one output pixel): wider spacing
+                // would let thin parts (one-voxel legs) compare their two sides.
+                crease_step: ((0.5 * n as f32 / (fov * unit)).round() as i32).max(o.supersample as i32),
+            };
+            let wg = [size.div_ceil(8), size.div_ceil(8), 1];
+            gpu.dispatch(pass, SHADE, "reference_shade", &sp, &[Arg::R(&gbuf), Arg::W(out)], wg)?;
+        }
+        Ok(())
     }
 }

@@ -1,0 +1,315 @@
+//! Training and test sets: the on-disk format `rendernet-dataset-1`, its reader, and (in
+//! [`generate`]) the generator behind `rendernet dataset`.
+//!
+//! # Format
+//! A directory holding `manifest.json` and safetensors shards of up to [`SHARD_SIZE`] samples,
+//! `train-00000.safetensors`, ..., `test-00000.safetensors`, .... Each shard of `K` samples has
+//! - `grids` U8 `[K, R, R, R]`: the network's input occupancy times 255, rounded;
+//! - `views` F32 `[K, 3]`: camera azimuth (deg), elevation (deg), radius ([`View`]);
+//! - `lights` F32 `[K, 5]`: light azimuth (deg), elevation (deg), r, g, b ([`Light`]; the
+//!   material constants are the manifest's `light`);
+//! - `shape_ids` F32 `[K]`: the shape's index `i` (train and test never share one);
+//! - images U8 `[K, C, S, S]` (value times 255, rounded): for shader `phong` the tensors
+//!   `phong` (3), `normal` (3), `albedo` (1, grey) and `mask` (1); for any other shader one
+//!   tensor `image` with that shader's channels.
+//!
+//! Samples are stored shape-major (all views of shape 0, then shape 1, ...), so sample `j` of
+//! a split lives in shard `j / SHARD_SIZE` at row `j % SHARD_SIZE`.
+
+pub mod generate;
+mod manifest;
+
+pub use generate::{GenerateOptions, Shapes, Summary, generate};
+pub use manifest::{LightParams, Manifest, SplitInfo};
+
+use crate::error::{Error, Result};
+use crate::reference::{Image, Light, Shader, View};
+use crate::voxel::VoxelGrid;
+use safetensors::{Dtype, SafeTensors};
+use std::collections::BTreeMap;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+/// The manifest's `format` value.
+pub const FORMAT: &str = "rendernet-dataset-1";
+/// Most samples in one shard.
+pub const SHARD_SIZE: usize = 256;
+/// Manifest file name inside a dataset directory.
+pub const MANIFEST: &str = "manifest.json";
+/// Input grids tensor.
+pub const GRIDS: &str = "grids";
+/// Camera poses tensor.
+pub const VIEWS: &str = "views";
+/// Lights tensor.
+pub const LIGHTS: &str = "lights";
+/// Shape index tensor.
+pub const SHAPE_IDS: &str = "shape_ids";
+/// Largest safetensors header accepted (ours are a few hundred bytes).
+const MAX_HEADER: u64 = 1 << 20;
+
+/// Which half of a dataset.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Split {
+    /// Training samples.
+    Train,
+    /// Held-out samples, from shapes training never sees.
+    Test,
+}
+
+impl Split {
+    /// `train` or `test`, as in file names and the manifest.
+    pub fn name(self) -> &'static str {
+        match self {
+            Split::Train => "train",
+            Split::Test => "test",
+        }
+    }
+
+    /// The shard file name of index `k`, e.g. `train-00003.safetensors`.
+    pub fn shard_name(self, k: usize) -> String {
+        format!("{}-{k:05}.safetensors", self.name())
+    }
+}
+
+/// The image tensors a dataset of `shader` stores: `(tensor name, shader rendered, channels)`.
+/// Phong datasets also carry the normal map, grey albedo and mask, which a shading network
+/// or its losses may want; albedo is stored grey (channel 0) because the grids are uncoloured.
+pub fn image_outputs(shader: Shader) -> Vec<(&'static str, Shader, usize)> {
+    match shader {
+        Shader::Phong => vec![
+            ("phong", Shader::Phong, 3),
+            ("normal", Shader::Normal, 3),
+            ("albedo", Shader::Albedo, 1),
+            ("mask", Shader::Mask, 1),
+        ],
+        s => vec![("image", s, s.channels())],
+    }
+}
+
+/// One sample as the model consumes it.
+#[derive(Clone, Debug)]
+pub struct Sample {
+    /// Input occupancy `R^3`, values `u8 / 255`.
+    pub grid: VoxelGrid,
+    /// Camera pose.
+    pub view: View,
+    /// Light, with the manifest's material constants.
+    pub light: Light,
+    /// Index of the shape this view shows.
+    pub shape_id: u32,
+    /// Target images by tensor name (see [`image_outputs`]), values `u8 / 255`.
+    pub images: BTreeMap<String, Image>,
+}
+
+/// One shard's tensors, decoded.
+struct Shard {
+    len: usize,
+    grids: Vec<u8>,
+    views: Vec<f32>,
+    lights: Vec<f32>,
+    shape_ids: Vec<f32>,
+    images: BTreeMap<String, Vec<u8>>,
+}
+
+/// An opened dataset: manifest and shard headers validated, shards loaded on demand.
+pub struct Dataset {
+    dir: PathBuf,
+    /// The parsed manifest.
+    pub manifest: Manifest,
+    outputs: Vec<(&'static str, Shader, usize)>,
+    /// Recently used shards; two, so a reader alternating between splits does not thrash.
+    cache: Mutex<Vec<(Split, usize, Arc<Shard>)>>,
+}
+
+/// One split of a [`Dataset`].
+#[derive(Clone, Copy)]
+pub struct SplitView<'a> {
+    ds: &'a Dataset,
+    split: Split,
+}
+
+impl Dataset {
+    /// Opens `dir`: parses `manifest.json` and checks every listed shard's header (tensor
+    /// names, dtypes, shapes, file length) against it. Errors name the file and the field.
+    pub fn open(dir: impl AsRef<Path>) -> Result<Dataset> {
+        let dir = dir.as_ref().to_path_buf();
+        let mpath = dir.join(MANIFEST);
+        let text = std::fs::read_to_string(&mpath).map_err(|e| Error::Io { path: mpath.display().to_string(), source: e })?;
+        let manifest = Manifest::parse(&text, &mpath.display().to_string())?;
+        let outputs = image_outputs(manifest.shader_kind()?);
+        let ds = Dataset { dir, manifest, outputs, cache: Mutex::new(Vec::new()) };
+        for split in [Split::Train, Split::Test] {
+            for k in 0..ds.info(split).shards.len() {
+                ds.check_header(split, k)?;
+            }
+        }
+        Ok(ds)
+    }
+
+    /// The directory it was opened from.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// One split.
+    pub fn split(&self, split: Split) -> SplitView<'_> {
+        SplitView { ds: self, split }
+    }
+
+    fn info(&self, split: Split) -> &SplitInfo {
+        match split {
+            Split::Train => &self.manifest.train,
+            Split::Test => &self.manifest.test,
+        }
+    }
+
+    /// `(name, dtype, shape)` of every tensor shard `k` of `split` must hold.
+    fn expected(&self, split: Split, k: usize) -> Vec<(String, Dtype, Vec<usize>)> {
+        let m = &self.manifest;
+        let n = (self.info(split).count - k * SHARD_SIZE).min(SHARD_SIZE);
+        let (r, s) = (m.res, m.image);
+        let mut v = vec![
+            (GRIDS.to_string(), Dtype::U8, vec![n, r, r, r]),
+            (VIEWS.to_string(), Dtype::F32, vec![n, 3]),
+            (LIGHTS.to_string(), Dtype::F32, vec![n, 5]),
+            (SHAPE_IDS.to_string(), Dtype::F32, vec![n]),
+        ];
+        v.extend(self.outputs.iter().map(|&(name, _, c)| (name.to_string(), Dtype::U8, vec![n, c, s, s])));
+        v
+    }
+
+    fn shard_path(&self, split: Split, k: usize) -> PathBuf {
+        self.dir.join(&self.info(split).shards[k])
+    }
+
+    /// Reads only the header of a shard and checks it (cheap: no tensor data is read).
+    fn check_header(&self, split: Split, k: usize) -> Result<()> {
+        let path = self.shard_path(split, k);
+        let name = path.display().to_string();
+        let io = |e| Error::Io { path: name.clone(), source: e };
+        let bad = |msg: String| Error::Invalid(format!("{name}: {msg}"));
+        let mut f = std::fs::File::open(&path).map_err(io)?;
+        let file_len = f.metadata().map_err(io)?.len();
+        let mut len8 = [0u8; 8];
+        f.read_exact(&mut len8).map_err(|_| bad("truncated: no safetensors header".into()))?;
+        let hlen = u64::from_le_bytes(len8);
+        if hlen > MAX_HEADER || 8 + hlen > file_len {
+            return Err(bad(format!("safetensors header length {hlen} is absurd for a {file_len}-byte file")));
+        }
+        let mut header = vec![0u8; hlen as usize];
+        f.read_exact(&mut header).map_err(io)?;
+        let json: serde_json::Value =
+            serde_json::from_slice(&header).map_err(|e| bad(format!("safetensors header is not JSON: {e}")))?;
+        let obj = json.as_object().ok_or_else(|| bad("safetensors header is not a JSON object".into()))?;
+        let mut data_end = 0u64;
+        let expected = self.expected(split, k);
+        for (tname, dtype, shape) in &expected {
+            let t = obj.get(tname).ok_or_else(|| bad(format!("tensor `{tname}` is missing")))?;
+            let got_dtype = t.get("dtype").and_then(|d| d.as_str()).unwrap_or("?");
+            if got_dtype != format!("{dtype:?}") {
+                return Err(bad(format!("tensor `{tname}` has dtype {got_dtype}, expected {dtype:?}")));
+            }
+            let got_shape: Option<Vec<usize>> = t
+                .get("shape")
+                .and_then(|s| s.as_array())
+                .map(|a| a.iter().filter_map(|x| x.as_u64().map(|x| x as usize)).collect());
+            if got_shape.as_ref() != Some(shape) {
+                return Err(bad(format!("tensor `{tname}` has shape {got_shape:?}, expected {shape:?}")));
+            }
+            let end = t.get("data_offsets").and_then(|o| o.get(1)).and_then(|e| e.as_u64()).unwrap_or(u64::MAX);
+            data_end = data_end.max(end);
+        }
+        if let Some(extra) = obj.keys().find(|k| *k != "__metadata__" && !expected.iter().any(|(n, _, _)| n == *k)) {
+            return Err(bad(format!("unexpected tensor `{extra}`")));
+        }
+        if 8 + hlen + data_end != file_len {
+            return Err(bad(format!("file is {file_len} bytes but its header describes {}", 8 + hlen.saturating_add(data_end))));
+        }
+        Ok(())
+    }
+
+    /// Loads (or takes from the cache) shard `k` of `split`.
+    fn shard(&self, split: Split, k: usize) -> Result<Arc<Shard>> {
+        let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = cache.iter().position(|(s, j, _)| *s == split && *j == k) {
+            let hit = cache.remove(p);
+            let shard = hit.2.clone();
+            cache.insert(0, hit);
+            return Ok(shard);
+        }
+        let shard = Arc::new(self.load_shard(split, k)?);
+        cache.insert(0, (split, k, shard.clone()));
+        cache.truncate(2);
+        Ok(shard)
+    }
+
+    fn load_shard(&self, split: Split, k: usize) -> Result<Shard> {
+        let path = self.shard_path(split, k);
+        let name = path.display().to_string();
+        let bytes = std::fs::read(&path).map_err(|e| Error::Io { path: name.clone(), source: e })?;
+        let st = SafeTensors::deserialize(&bytes).map_err(|e| Error::Invalid(format!("{name}: not a valid safetensors file: {e}")))?;
+        let mut tensors = BTreeMap::new();
+        for (tname, dtype, shape) in self.expected(split, k) {
+            let t = st.tensor(&tname).map_err(|e| Error::Invalid(format!("{name}: tensor `{tname}`: {e}")))?;
+            if t.dtype() != dtype || t.shape() != shape.as_slice() {
+                return Err(Error::Invalid(format!("{name}: tensor `{tname}` is {:?} {:?}, expected {dtype:?} {shape:?}", t.dtype(), t.shape())));
+            }
+            tensors.insert(tname, t.data().to_vec());
+        }
+        let f32s = |b: Vec<u8>| b.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect::<Vec<f32>>();
+        let mut take = |n: &str| tensors.remove(n).unwrap_or_default();
+        let (grids, views, lights, shape_ids) = (take(GRIDS), f32s(take(VIEWS)), f32s(take(LIGHTS)), f32s(take(SHAPE_IDS)));
+        Ok(Shard { len: shape_ids.len(), grids, views, lights, shape_ids, images: tensors })
+    }
+}
+
+impl SplitView<'_> {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.ds.info(self.split).count
+    }
+
+    /// True when the split has no samples.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Sample `i` (`0..len`), decoding its shard on first use.
+    pub fn get(&self, i: usize) -> Result<Sample> {
+        let ds = self.ds;
+        if i >= self.len() {
+            return Err(Error::Invalid(format!("{}: {} sample {i} out of range (0..{})", ds.dir.display(), self.split.name(), self.len())));
+        }
+        let shard = ds.shard(self.split, i / SHARD_SIZE)?;
+        let j = i % SHARD_SIZE;
+        debug_assert!(j < shard.len);
+        let m = &ds.manifest;
+        let unpack = |b: &[u8]| b.iter().map(|&x| x as f32 / 255.0).collect::<Vec<f32>>();
+        let r3 = m.res * m.res * m.res;
+        let grid = VoxelGrid::new([m.res; 3], unpack(&shard.grids[j * r3..(j + 1) * r3]))
+            .map_err(|e| Error::Invalid(e.to_string()))?;
+        let v = &shard.views[j * 3..j * 3 + 3];
+        let l = &shard.lights[j * 5..j * 5 + 5];
+        let view = View { azimuth: v[0] as f64, elevation: v[1] as f64, radius: v[2] as f64 };
+        let light = Light {
+            azimuth: l[0] as f64,
+            elevation: l[1] as f64,
+            colour: [l[2], l[3], l[4]],
+            ambient: m.light.ambient,
+            kd: m.light.kd,
+            ks: m.light.ks,
+            shininess: m.light.shininess,
+        };
+        let s2 = m.image * m.image;
+        let images = ds
+            .outputs
+            .iter()
+            .map(|&(name, _, c)| {
+                let data = unpack(&shard.images[name][j * c * s2..(j + 1) * c * s2]);
+                (name.to_string(), Image { channels: c, size: m.image, data })
+            })
+            .collect();
+        Ok(Sample { grid, view, light, shape_id: shard.shape_ids[j] as u32, images })
+    }
+}
