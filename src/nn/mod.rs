@@ -2,4 +2,5 @@
 //! tie its resampling to the reference renderer's images.
 
 pub mod camera;
+pub mod render;
 pub mod rendernet;
