@@ -79,7 +79,12 @@ pub fn run(a: TrainArgs) -> Result<()> {
             let e = ema.map_or(loss, |e| 0.98 * e + 0.02 * loss);
             ema = Some(e);
             bar.set_position(step);
-            bar.set_message(format!("loss {e:.4} lr {lr:.1e} crop {window} {images_per_s:.1} img/s psnr {last_psnr}"));
+            let msg = format!("loss {e:.4} lr {lr:.1e} crop {window} {images_per_s:.1} img/s psnr {last_psnr}");
+            // Without a terminal (nohup, CI logs) the bar is hidden: log a line now and then.
+            if bar.is_hidden() && step % 100 == 0 {
+                println!("step {step}/{}: {msg}", bar.length().unwrap_or(0));
+            }
+            bar.set_message(msg);
         }
         Progress::Eval { step, psnr, checkpoint } => {
             last_psnr = format!("{psnr:.2}");
