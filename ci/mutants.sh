@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Proves the kernel tests can fail: applies each mutation in ci/mutants.txt (one per line:
 # shader file | sed expression | test target), runs that test, and reports any mutation
-# the tests did NOT catch. Restores every file. Not part of CI (it rebuilds per mutation).
+# the tests did NOT catch (or those of the file given as $1). Restores every file. Not part of CI (it rebuilds per mutation).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 source ci/lavapipe.sh
@@ -19,5 +19,5 @@ while IFS='|' read -r file expr test; do
         echo "caught       $file: $expr ($test)"
     fi
     cp /tmp/mutant.bak "$file"
-done < ci/mutants.txt
+done < "${1:-ci/mutants.txt}"
 exit $survived

@@ -2,6 +2,8 @@
 //   m = b1 m + (1 - b1) g,  v = b2 v + (1 - b2) g^2,
 //   param -= lr * (m / bc1) / (sqrt(v / bc2) + eps),  bc1 = 1 - b1^t, bc2 = 1 - b2^t.
 // The bias corrections are computed on the host in f64 (b2^t for large t loses digits in f32).
+// `guard[0] != 0` (set by finite.wgsl when a gradient holds NaN/Inf) skips the update, so a
+// poisoned step never reaches the weights; the unguarded step binds a zero buffer there.
 
 struct Params { n: u32, lr: f32, beta1: f32, beta2: f32, eps: f32, bc1: f32, bc2: f32 }
 @group(0) @binding(0) var<uniform> p: Params;
@@ -9,11 +11,12 @@ struct Params { n: u32, lr: f32, beta1: f32, beta2: f32, eps: f32, bc1: f32, bc2
 @group(0) @binding(2) var<storage, read_write> param: array<f32>;
 @group(0) @binding(3) var<storage, read_write> m: array<f32>;
 @group(0) @binding(4) var<storage, read_write> v: array<f32>;
+@group(0) @binding(5) var<storage, read> guard: array<f32>;
 
 @compute @workgroup_size(64)
 fn adam_step(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = gid.x + gid.y * nwg.x * 64u;
-    if (i >= p.n) { return; }
+    if (i >= p.n || guard[0] != 0.0) { return; }
     let g = grad[i];
     let mi = p.beta1 * m[i] + (1.0 - p.beta1) * g;
     let vi = p.beta2 * v[i] + (1.0 - p.beta2) * g * g;

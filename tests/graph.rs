@@ -303,3 +303,19 @@ fn exponential_decay_matches_the_original_schedule() {
     assert!((exponential_decay(1.0, 0.96, 1000, 2500, true) - 0.96f32.powi(2)).abs() < 1e-7);
     assert!((exponential_decay(1.0, 0.96, 1000, 2500, false) - 0.96f32.powf(2.5)).abs() < 1e-6);
 }
+
+#[test]
+fn a_step_with_nan_or_inf_gradients_is_refused_and_changes_nothing() {
+    let (n, mut ex, _, _) = fed(5);
+    ex.training = true;
+    ex.train_step(gpu(), n.loss, &Adam::new(1e-2)).unwrap();
+    let before: Vec<Vec<f32>> = [n.alpha, n.w, n.b].iter().map(|&v| ex.read(gpu(), v).unwrap()).collect();
+    // Finite inputs whose products overflow f32 in the backward pass.
+    ex.feed(gpu(), n.x, &vec![3e37; N * C * D * H * W]).unwrap();
+    let e = ex.train_step(gpu(), n.loss, &Adam::new(1e-2)).unwrap_err().to_string();
+    assert!(e.contains("step 2") && e.contains("NaN or Inf") && e.contains("weights are unchanged"), "{e}");
+    assert!(e.contains("'act.alpha'") || e.contains("'proj.weight'") || e.contains("'proj.bias'"), "{e}");
+    let after: Vec<Vec<f32>> = [n.alpha, n.w, n.b].iter().map(|&v| ex.read(gpu(), v).unwrap()).collect();
+    assert_eq!(before, after);
+    assert_eq!(ex.step, 1, "a refused step does not count");
+}

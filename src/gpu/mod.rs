@@ -9,6 +9,7 @@ mod tensor;
 pub use kernel::{Arg, Shader, grid_1d, MAX_WORKGROUPS_PER_DIM};
 pub use pool::BufferPool;
 pub use tensor::Tensor;
+pub(crate) use tensor::read_staging;
 
 use crate::error::{Error, Result};
 use std::collections::HashMap;

@@ -97,22 +97,7 @@ impl Tensor {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         enc.copy_buffer_to_buffer(&self.buffer, 0, &staging, 0, bytes);
         gpu.submit_and_wait(enc)?;
-        let slice = staging.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        gpu.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| Error::Readback(e.to_string()))?;
-        rx.recv()
-            .map_err(|e| Error::Readback(e.to_string()))?
-            .map_err(|e| Error::Readback(e.to_string()))?;
-        let view = slice.get_mapped_range().map_err(|e| Error::Readback(e.to_string()))?;
-        let out = bytemuck::cast_slice(&view).to_vec();
-        drop(view);
-        staging.unmap();
-        Ok(out)
+        read_staging(gpu, &staging)
     }
 
     /// The same buffer seen with another shape of equal element count (a free reshape:
@@ -168,4 +153,20 @@ impl Tensor {
         gpu.check_binding_size(&format!("tensor {shape:?}"), n)?;
         Ok(n)
     }
+}
+
+/// Maps a MAP_READ buffer whose copy has been submitted and completed, and reads it as f32.
+pub(crate) fn read_staging(gpu: &Gpu, staging: &wgpu::Buffer) -> Result<Vec<f32>> {
+    let slice = staging.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Readback(e.to_string()))?;
+    rx.recv().map_err(|e| Error::Readback(e.to_string()))?.map_err(|e| Error::Readback(e.to_string()))?;
+    let view = slice.get_mapped_range().map_err(|e| Error::Readback(e.to_string()))?;
+    let out = bytemuck::cast_slice(&view).to_vec();
+    drop(view);
+    staging.unmap();
+    Ok(out)
 }

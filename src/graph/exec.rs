@@ -42,6 +42,8 @@ pub struct Executor {
     pub(crate) seed: u64,
     pub(crate) adam_state: Vec<Option<(Tensor, Tensor)>>,
     loss_one: Option<Tensor>,
+    /// Gradient guard flags `[1 + params]` and the buffer they are copied to for reading.
+    guard: Option<(Tensor, wgpu::Buffer)>,
 }
 
 fn bytes(shape: &[usize]) -> u64 {
@@ -72,6 +74,7 @@ impl Executor {
             seed,
             adam_state: vec![None; n],
             loss_one: None,
+            guard: None,
             graph,
         })
     }
@@ -226,18 +229,58 @@ impl Executor {
                 self.record_adam(gpu, &mut pass, adam)?;
             }
         }
+        if let (Some(_), Some((flags, staging))) = (adam, &self.guard) {
+            enc.copy_buffer_to_buffer(flags.buffer(), 0, staging, 0, staging.size());
+        }
         gpu.submit_and_wait(enc)?;
         if adam.is_some() {
+            self.check_guard(gpu)?;
             self.step += 1;
         }
         Ok(StepStats { dispatches: gpu.dispatch_count() - d0, submits: 1, peak_bytes: self.pool.allocated_bytes(), tensor_bytes })
     }
 
-    /// Adam on every parameter that received a gradient; moments are created (zeroed) on
-    /// first use and kept for checkpoints.
+    /// Reads the guard flags copied out in the step's own submit; on NaN/Inf names the first
+    /// parameter whose gradient held it (the GPU already skipped the update).
+    fn check_guard(&self, gpu: &Gpu) -> Result<()> {
+        let Some((_, staging)) = &self.guard else { return Ok(()) };
+        let flags = crate::gpu::read_staging(gpu, staging)?;
+        if flags[0] == 0.0 {
+            return Ok(());
+        }
+        let params = self.graph.params();
+        let bad = (1..flags.len()).find(|&k| flags[k] != 0.0).map(|k| self.graph.info(params[k - 1]).name.clone());
+        Err(Error::Invalid(format!(
+            "step {}: the gradient of '{}' holds NaN or Inf; the update was skipped and the weights are unchanged",
+            self.step + 1,
+            bad.unwrap_or_else(|| "?".into())
+        )))
+    }
+
+    /// Adam on every parameter that received a gradient, guarded: every gradient is checked
+    /// for NaN/Inf first and, if any is bad, no parameter moves. Moments are created
+    /// (zeroed) on first use and kept for checkpoints.
     fn record_adam(&mut self, gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, adam: &ops::adam::Adam) -> Result<()> {
         let t = u32::try_from(self.step + 1).map_err(|_| Error::Invalid("optimizer step beyond u32".into()))?;
-        for v in self.graph.params() {
+        let params = self.graph.params();
+        if self.guard.is_none() {
+            let flags = Tensor::zeros(gpu, &[1 + params.len()])?;
+            let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("guard readback"),
+                size: flags.buffer().size(),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            self.guard = Some((flags, staging));
+        }
+        let flags = self.guard.as_ref().expect("just set").0.clone();
+        for (k, v) in params.iter().enumerate() {
+            if let Some(g) = self.grads[v.0].as_ref() {
+                ops::finite::check(gpu, pass, g, &flags, k + 1)?;
+            }
+        }
+        ops::finite::any(gpu, pass, &flags, params.len())?;
+        for v in params {
             let Some(g) = self.grads[v.0].as_ref() else { continue };
             let shape = &self.graph.values[v.0].shape;
             if self.adam_state[v.0].is_none() {
@@ -245,7 +288,7 @@ impl Executor {
             }
             let (m, s) = self.adam_state[v.0].as_ref().expect("just set");
             let p = self.values[v.0].as_ref().expect("params are always allocated");
-            adam.step(gpu, pass, t, p, g, m, s)?;
+            adam.step_guarded(gpu, pass, t, p, g, m, s, Some(&flags))?;
         }
         Ok(())
     }

@@ -6,9 +6,9 @@
 //! bias-corrected `sqrt(v̂)`. TensorFlow, which the original code used, adds it to the
 //! uncorrected `sqrt(v)` instead; with `eps = 1e-8` the two differ only where `v` is ~1e-16.
 
-use super::{elementwise, expect_shape};
+use super::expect_shape;
 use crate::error::{Error, Result};
-use crate::gpu::{Arg, Gpu, Shader, Tensor};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
 
 const SHADER: Shader = Shader { name: "adam", source: include_str!("../../shaders/adam.wgsl") };
 
@@ -57,6 +57,23 @@ impl Adam {
         m: &Tensor,
         v: &Tensor,
     ) -> Result<()> {
+        self.step_guarded(gpu, pass, t, param, grad, m, v, None)
+    }
+
+    /// [`Adam::step`] that does nothing when `guard[0] != 0` (see `ops::finite`): the
+    /// check happens on the GPU, so a training step stays one submit.
+    #[allow(clippy::too_many_arguments)]
+    pub fn step_guarded(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        t: u32,
+        param: &Tensor,
+        grad: &Tensor,
+        m: &Tensor,
+        v: &Tensor,
+        guard: Option<&Tensor>,
+    ) -> Result<()> {
         let op = "adam_step";
         if t == 0 {
             return Err(Error::Invalid(format!("{op}: step t is 1-based, got 0 (bias correction would divide by 0)")));
@@ -80,7 +97,8 @@ impl Adam {
             bc1: bc(self.beta1),
             bc2: bc(self.beta2),
         };
-        let args = [Arg::R(grad), Arg::W(param), Arg::W(m), Arg::W(v)];
-        elementwise(gpu, pass, SHADER, op, &p, &args, n)
+        let args = [Arg::R(grad), Arg::W(param), Arg::W(m), Arg::W(v), guard.map_or(Arg::Absent, Arg::R)];
+        // Not `elementwise`: the guard is one value, not one per element.
+        gpu.dispatch(pass, SHADER, op, &p, &args, grid_1d(n as u64, 64)?)
     }
 }

@@ -12,6 +12,7 @@ pub mod conv;
 pub mod conv_transpose;
 pub mod dropout;
 pub mod elu;
+pub mod finite;
 pub mod loss;
 pub mod phong;
 pub mod prelu;

@@ -1,0 +1,51 @@
+//! The gradient guard: NaN and Inf are flagged wherever they sit (odd sizes, last element),
+//! clean tensors are not, the summary flag ORs the slots, and a guarded Adam step leaves
+//! parameters, moments and all untouched when the summary is set.
+
+mod common;
+use common::*;
+use rendernet::ops::{adam::Adam, finite};
+
+#[test]
+fn flags_nan_and_inf_and_nothing_else() {
+    let n = 131; // not a multiple of the 64-wide workgroup
+    let mut rng = Rng(9);
+    let clean: Vec<f32> = rng.vec(n, -1e30, 1e30).iter().map(|&v| v as f32).collect();
+    let mut with_nan = clean.clone();
+    with_nan[n - 1] = f32::NAN;
+    let mut with_inf = clean.clone();
+    with_inf[65] = f32::NEG_INFINITY;
+    let g = gpu();
+    let ts: Vec<_> = [&clean, &with_nan, &with_inf].iter().map(|v| rendernet::Tensor::from_slice(g, &[n], v).unwrap()).collect();
+    let flags = zeros(&[5]);
+    run(|p| {
+        for (k, t) in ts.iter().enumerate() {
+            finite::check(g, p, t, &flags, k + 1)?;
+        }
+        finite::any(g, p, &flags, 3)
+    });
+    assert_eq!(download(&flags), [1.0, 0.0, 1.0, 1.0, 0.0]);
+    run(|p| {
+        finite::check(g, p, &ts[0], &flags, 2)?;
+        finite::check(g, p, &ts[0], &flags, 3)?;
+        finite::any(g, p, &flags, 3)
+    });
+    assert_eq!(download(&flags), [0.0, 0.0, 0.0, 0.0, 0.0], "a clean step clears the flags");
+    assert!(gpu().run(|p| finite::check(g, p, &ts[0], &flags, 0)).is_err(), "slot 0 is the summary");
+}
+
+#[test]
+fn guarded_adam_skips_a_poisoned_step() {
+    let n = 7;
+    let (param, grad) = (upload(&[n], &[0.5; 7]), upload(&[n], &[0.25; 7]));
+    let (m, v) = (zeros(&[n]), zeros(&[n]));
+    let guard = upload(&[1], &[1.0]);
+    let adam = Adam::new(0.1);
+    run(|p| adam.step_guarded(gpu(), p, 1, &param, &grad, &m, &v, Some(&guard)));
+    assert_eq!(download(&param), [0.5; 7], "set guard: parameters untouched");
+    assert_eq!(download(&m), [0.0; 7], "set guard: moments untouched");
+    guard.write(gpu(), &[0.0]).unwrap();
+    run(|p| adam.step_guarded(gpu(), p, 1, &param, &grad, &m, &v, Some(&guard)));
+    // The first Adam step moves every parameter by exactly lr (bias-corrected m / sqrt(v) = 1).
+    assert_close("clear guard: a normal step", &download(&param), &[0.4; 7], 1e-6, 1e-5);
+}

@@ -1,0 +1,38 @@
+// Gradient guard. `finite_check` sets flags[slot] to 1 if any value of x is NaN or Inf (an
+// all-ones exponent, tested on the bits so no fast-math assumption can fold it away), else
+// 0; `finite_any` sets flags[0] to 1 if any of flags[1..=count] is set. Adam reads flags[0]
+// and leaves every parameter untouched when it is set. This op has no gradient.
+
+struct Params { n: u32, slot: u32 }
+@group(0) @binding(0) var<uniform> p: Params;
+
+@group(0) @binding(1) var<storage, read> x: array<f32>;
+@group(0) @binding(2) var<storage, read_write> flags: array<f32>;
+
+var<workgroup> bad: array<u32, 64>;
+
+@compute @workgroup_size(64)
+fn finite_check(@builtin(local_invocation_index) lid: u32) {
+    var b = 0u;
+    for (var i = lid; i < p.n; i += 64u) {
+        b |= u32((bitcast<u32>(x[i]) & 0x7f800000u) == 0x7f800000u);
+    }
+    bad[lid] = b;
+    workgroupBarrier();
+    for (var w = 32u; w > 0u; w >>= 1u) {
+        if (lid < w) { bad[lid] |= bad[lid + w]; }
+        workgroupBarrier();
+    }
+    if (lid == 0u) { flags[p.slot] = f32(bad[0]); }
+}
+
+@group(0) @binding(1) var<storage, read_write> aflags: array<f32>;
+
+@compute @workgroup_size(1)
+fn finite_any() {
+    var any = 0.0;
+    for (var k = 1u; k <= p.n; k++) {
+        any = max(any, aflags[k]);
+    }
+    aflags[0] = any;
+}

@@ -1,0 +1,33 @@
+//! The gradient guard (binds `shaders/finite.wgsl`): flags tensors holding NaN or Inf so the
+//! optimizer can skip a poisoned step on the GPU, inside the step's single submit.
+
+use crate::error::{Result, shape_err};
+use crate::gpu::{Arg, Gpu, Shader, Tensor};
+
+const SHADER: Shader = Shader { name: "finite", source: include_str!("../../shaders/finite.wgsl") };
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    n: u32,
+    slot: u32,
+}
+
+/// `flags[slot] = 1` if `x` holds a NaN or Inf, else 0. `slot` must be >= 1 (slot 0 is the
+/// summary written by [`any`]).
+pub fn check(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, flags: &Tensor, slot: usize) -> Result<()> {
+    if slot == 0 || slot >= flags.numel() {
+        return Err(shape_err("finite_check", format!("slot {slot} outside 1..{} of flags {:?}", flags.numel(), flags.shape())));
+    }
+    let p = Params { n: x.numel() as u32, slot: slot as u32 };
+    gpu.dispatch(pass, SHADER, "finite_check", &p, &[Arg::R(x), Arg::W(flags)], [1, 1, 1])
+}
+
+/// `flags[0] = 1` if any of `flags[1..=count]` is set, else 0.
+pub fn any(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, flags: &Tensor, count: usize) -> Result<()> {
+    if count + 1 > flags.numel() {
+        return Err(shape_err("finite_any", format!("{count} slots do not fit flags {:?}", flags.shape())));
+    }
+    let p = Params { n: count as u32, slot: 0 };
+    gpu.dispatch(pass, SHADER, "finite_any", &p, &[Arg::W(flags)], [1, 1, 1])
+}
