@@ -11,7 +11,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         return Err("usage: voxelize MESH N OUT.binvox".into());
     };
     let mesh = Mesh::load(mesh)?;
-    let grid = voxelize(&mesh, &VoxelizeOptions { resolution: n.parse()?, ..Default::default() })?;
+    let grid = voxelize(
+        &mesh,
+        &VoxelizeOptions {
+            resolution: n.parse()?,
+            ..Default::default()
+        },
+    )?;
     let filled = grid.fill_fraction();
     Binvox::from_grid(grid).write(out)?;
     println!("wrote {out} ({n}^3, {:.1}% filled)", 100.0 * filled);
