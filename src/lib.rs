@@ -13,8 +13,10 @@ pub mod data;
 pub mod error;
 pub mod gpu;
 pub mod graph;
+pub mod nn;
 pub mod ops;
 pub mod reference;
+pub mod train;
 pub mod voxel;
 
 pub use error::{Error, Result};

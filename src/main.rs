@@ -26,6 +26,14 @@ enum Cmd {
     /// Generate a deterministic, sharded training/test set (input grids, poses, lights and
     /// reference-rendered targets) with a manifest; see datasets/README.md.
     Dataset(cli::dataset::DatasetArgs),
+    /// Render a voxel grid (binvox, safetensors or a mesh; any size) with trained RenderNet
+    /// to a PNG. With no arguments: the built-in shape with the embedded weights.
+    Render(cli::render::RenderArgs),
+    /// Train RenderNet on a dataset (patch training, Adam, checkpoints, resume, curve PNG).
+    /// On a real GPU the same command trains `--preset paper`.
+    Train(cli::train::TrainArgs),
+    /// Mean held-out PSNR (95% interval) and per-shape PSNR of trained weights.
+    Eval(cli::eval::EvalArgs),
 }
 
 fn main() -> ExitCode {
@@ -39,6 +47,9 @@ fn main() -> ExitCode {
         Cmd::Info => cli::info::run(),
         Cmd::Truth(a) => cli::truth::run(a),
         Cmd::Dataset(a) => cli::dataset::run(a),
+        Cmd::Train(a) => cli::train::run(a),
+        Cmd::Render(a) => cli::render::run(a),
+        Cmd::Eval(a) => cli::eval::run(a),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,5 +1,8 @@
 //! Subcommand implementations: parse, call the library, report.
 
 pub mod dataset;
+pub mod eval;
 pub mod info;
+pub mod render;
+pub mod train;
 pub mod truth;

@@ -7,9 +7,9 @@ use rendernet::{Error, Gpu, Result};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// Flags of `rendernet truth`.
+/// What to render and from where: shared by `truth` and `render`.
 #[derive(Args, Debug)]
-pub struct TruthArgs {
+pub struct SceneArgs {
     /// Voxel grid (.binvox, .safetensors) or mesh (.obj, .off, .ply, voxelised at --resolution).
     #[arg(long, value_name = "PATH", conflicts_with = "shape")]
     voxels: Option<PathBuf>,
@@ -37,6 +37,33 @@ pub struct TruthArgs {
     /// Light elevation (polar) in degrees relative to the camera (90 = level, smaller = above).
     #[arg(long, default_value_t = Light::default().elevation)]
     light_elevation: f64,
+}
+
+impl SceneArgs {
+    /// The camera the flags name.
+    pub fn view(&self) -> View {
+        View { azimuth: self.azimuth, elevation: self.elevation, radius: self.radius }
+    }
+
+    /// The light the flags name (material constants: the reference renderer's defaults).
+    pub fn light(&self) -> Light {
+        Light { azimuth: self.light_azimuth, elevation: self.light_elevation, ..Light::default() }
+    }
+
+    /// One line saying what the flags render.
+    pub fn describe(&self, what: &str) -> String {
+        format!(
+            "{what}, azimuth {} elevation {} radius {}, light azimuth {} elevation {}",
+            self.azimuth, self.elevation, self.radius, self.light_azimuth, self.light_elevation
+        )
+    }
+}
+
+/// Flags of `rendernet truth`.
+#[derive(Args, Debug)]
+pub struct TruthArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
     /// Output: phong, albedo, normal, depth, mask, toon, contour or ao.
     #[arg(long, default_value = "phong", value_parser = parse_shader)]
     shader: Shader,
@@ -73,7 +100,7 @@ fn voxel_err(e: voxel::VoxelError) -> Error {
 }
 
 /// Loads the grid the flags name, and says what it is.
-fn load(a: &TruthArgs) -> Result<(VoxelGrid, String)> {
+pub fn load(a: &SceneArgs) -> Result<(VoxelGrid, String)> {
     let Some(path) = &a.voxels else {
         // No file: a procedural shape; the embedded default is chair seed 0 at 64^3 until a
         // committed real-mesh fixture (the bunny) replaces it.
@@ -109,28 +136,16 @@ fn display(p: &Path) -> String {
 /// Loads, renders, writes the PNG, and reports what was rendered and how long it took.
 pub fn run(a: TruthArgs) -> Result<()> {
     let t0 = Instant::now();
-    let (grid, what) = load(&a)?;
+    let (grid, what) = load(&a.scene)?;
     let gpu = Gpu::new()?;
-    let view = View { azimuth: a.azimuth, elevation: a.elevation, radius: a.radius };
-    let light = Light { azimuth: a.light_azimuth, elevation: a.light_elevation, ..Light::default() };
+    let (view, light) = (a.scene.view(), a.scene.light());
     let renderer = Renderer::new(&gpu).with_options(Options { supersample: a.supersample, ..Options::default() });
     let t1 = Instant::now();
     let img = renderer.render(&gpu, &grid, &view, &light, a.shader, a.size)?;
     let render_s = t1.elapsed().as_secs_f64();
     img.save_png(&a.out)?;
-    println!(
-        "rendered {what}: shader {}, {}x{} px (supersample {}), azimuth {} elevation {} radius {}, \
-         light azimuth {} elevation {}",
-        a.shader.name(),
-        a.size,
-        a.size,
-        a.supersample,
-        a.azimuth,
-        a.elevation,
-        a.radius,
-        a.light_azimuth,
-        a.light_elevation
-    );
+    let what = format!("{what}: shader {}, {}x{} px (supersample {})", a.shader.name(), a.size, a.size, a.supersample);
+    println!("rendered {}", a.scene.describe(&what));
     println!("wrote {} in {:.2} s (render {:.2} s, on {})", a.out.display(), t0.elapsed().as_secs_f64(), render_s, gpu.info.name);
     Ok(())
 }

@@ -84,8 +84,12 @@ pub fn save_safetensors(path: &Path, tensors: &[Named], metadata: HashMap<String
 /// Reads every tensor of a safetensors file as f32 (other dtypes are an error naming the
 /// tensor), with the file's metadata.
 pub fn load_safetensors(path: &Path) -> Result<(BTreeMap<String, (Vec<usize>, Vec<f32>)>, HashMap<String, String>)> {
-    let p = path.display().to_string();
-    let data = std::fs::read(path).map_err(|e| Error::Io { path: p.clone(), source: e })?;
+    let data = std::fs::read(path).map_err(|e| Error::Io { path: path.display().to_string(), source: e })?;
+    parse_safetensors(&data, &path.display().to_string())
+}
+
+/// [`load_safetensors`] on bytes already in memory (embedded weights); `p` names them in errors.
+pub fn parse_safetensors(data: &[u8], p: &str) -> Result<(BTreeMap<String, (Vec<usize>, Vec<f32>)>, HashMap<String, String>)> {
     let st = SafeTensors::deserialize(&data).map_err(|e| Error::Invalid(format!("{p}: not a valid safetensors file: {e}")))?;
     let (_, meta) = SafeTensors::read_metadata(&data).map_err(|e| Error::Invalid(format!("{p}: {e}")))?;
     let mut out = BTreeMap::new();
@@ -124,6 +128,12 @@ impl Executor {
     pub fn load_params(&mut self, gpu: &Gpu, path: &Path) -> Result<()> {
         let (mut file, _) = load_safetensors(path)?;
         self.take_params(gpu, path, &mut file, true)
+    }
+
+    /// Loads parameters from safetensors bytes (e.g. weights embedded in the binary).
+    pub fn load_params_bytes(&mut self, gpu: &Gpu, bytes: &[u8], name: &str) -> Result<()> {
+        let (mut file, _) = parse_safetensors(bytes, name)?;
+        self.take_params(gpu, Path::new(name), &mut file, true)
     }
 
     fn take_params(&mut self, gpu: &Gpu, path: &Path, file: &mut BTreeMap<String, (Vec<usize>, Vec<f32>)>, exact: bool) -> Result<()> {

@@ -1,0 +1,63 @@
+//! How the network sees a grid: the axis order of its input tensor and the resampling pose
+//! for a view, chosen so that the camera-aligned grid lines up with the reference renderer's
+//! image (see `reference::camera` for the renderer's frames).
+//!
+//! The renderer maps object point `p` to camera coordinates `c = Rx(90° - el) Ry(az) p`
+//! (x right, y up, z towards the camera). The network's camera grid has axes
+//! `(D, H, W) = (c.z, -c.y, c.x)`: depth towards the camera, rows downwards as image rows,
+//! columns rightwards. That axis map `P` is a proper rotation and its own inverse, so
+//! feeding the grid with its axes permuted by `P` (input `[a, b, c]` = grid
+//! `[d = c, h = H-1-b, w = a]`) leaves the resampling op with exactly its own rotation form:
+//! `P Rx(t) Ry(az) P = R_el(-t) R_az(-az)` with `t = 90° - el` (checked numerically in the
+//! tests). The scale puts `cam_hw * scale / 2` camera voxels per object unit (the image is
+//! `2 / scale` units wide, `scale = 3.3 / radius`) and the object unit is the input's side.
+
+use crate::reference::{Light, View};
+use crate::voxel::VoxelGrid;
+
+/// The grid as the network's input `[R, R, R]` values, axes permuted as the module says.
+pub fn input_values(grid: &VoxelGrid) -> Vec<f32> {
+    let [d, h, w] = grid.dims();
+    let occ = grid.occupancy();
+    // Input axes (a, b, c) = (w, H-1-h, d): sizes (W, H, D).
+    let mut out = vec![0.0; d * h * w];
+    for a in 0..w {
+        for b in 0..h {
+            for c in 0..d {
+                out[(a * h + b) * d + c] = occ[(c * h + (h - 1 - b)) * w + a];
+            }
+        }
+    }
+    out
+}
+
+/// The input tensor's spatial shape for a grid of `dims` `[D, H, W]`: `[W, H, D]`.
+pub fn input_dims(dims: [usize; 3]) -> [usize; 3] {
+    [dims[2], dims[1], dims[0]]
+}
+
+/// The resampling pose `(scale, azimuth, elevation, t_d, t_h, t_w)` that maps an input grid
+/// of side `input` into a camera grid whose image plane is `cam_hw` voxels wide, as the
+/// renderer sees it from `view`. `crop` = `(h0, w0, h, w)` picks a window of the full
+/// camera grid (patch training): the translation moves that window into the output.
+pub fn pose_for_view(view: &View, input: usize, cam_hw: usize, crop: Option<[usize; 4]>) -> [f32; 6] {
+    let k = cam_hw as f64 * view.scale() / 2.0; // camera voxels per object unit
+    let s = k / input as f64;
+    let az = view.azimuth.rem_euclid(360.0).to_radians();
+    let t = (90.0 - view.elevation).to_radians();
+    let (th, tw) = match crop {
+        None => (0.0, 0.0),
+        Some([h0, w0, h, w]) => {
+            let centre = (cam_hw as f64 - 1.0) / 2.0;
+            (centre - h0 as f64 - (h as f64 - 1.0) / 2.0, centre - w0 as f64 - (w as f64 - 1.0) / 2.0)
+        }
+    };
+    [s as f32, -az as f32, -t as f32, 0.0, th as f32, tw as f32]
+}
+
+/// The Phong op's light `[6]`: unit direction towards the light in the camera frame, then
+/// colour, from the renderer's light.
+pub fn light_values(light: &Light) -> [f32; 6] {
+    let d = light.direction();
+    [d.x, d.y, d.z, light.colour[0], light.colour[1], light.colour[2]]
+}

@@ -1,0 +1,6 @@
+//! Networks built from graph ops: RenderNet and its presets, and the camera conventions that
+//! tie its resampling to the reference renderer's images.
+
+pub mod camera;
+pub mod render;
+pub mod rendernet;

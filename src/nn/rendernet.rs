@@ -1,0 +1,246 @@
+//! RenderNet (paper Section 3 and appendix) as a graph: pose resampling into a camera grid,
+//! 3D convolutions, 3D residual blocks, the projection unit, 2D residual blocks, transposed
+//! convolutions up to the image, and sigmoid heads. The Phong head predicts normal, albedo
+//! and mask maps and shades them with the input light (Section 3.3); other shaders use a
+//! direct image head. Widths, depths and sizes come from a [`Preset`].
+
+use super::camera;
+use crate::error::{Error, Result};
+use crate::graph::{Graph, Init, Op, Value};
+use crate::ops::conv::{Conv, Padding};
+use crate::ops::conv_transpose::ConvTranspose;
+use crate::ops::loss::Loss;
+use crate::ops::phong::Phong;
+use crate::reference::Light;
+
+/// Sizes of a RenderNet.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Preset {
+    /// Name used on the command line and in weight files.
+    pub name: &'static str,
+    /// Side of the input voxel grid (grids are resampled to it).
+    pub input: usize,
+    /// Side of the camera-aligned grid the input is resampled into (depth = height = width).
+    pub cam: usize,
+    /// Channels of the two 3D convs: a 5^3 stride-2 conv, then a 3^3 conv halving depth only.
+    pub c3: [usize; 2],
+    /// 3D residual blocks after them.
+    pub res3d: usize,
+    /// Output channels of the projection unit.
+    pub proj: usize,
+    /// Channels of the 2D trunk.
+    pub c2: usize,
+    /// 2D residual blocks.
+    pub res2d: usize,
+    /// Channels of each stride-2 transposed 4x4 conv; the image side is `cam/2 * 2^len`.
+    pub up: Vec<usize>,
+}
+
+impl Preset {
+    /// The small preset that trains on a 2-core CPU through lavapipe: 32^3 input, 64^3
+    /// camera grid, 128x128 image.
+    pub fn tiny() -> Preset {
+        Preset { name: "tiny", input: 32, cam: 64, c3: [8, 16], res3d: 0, proj: 64, c2: 32, res2d: 2, up: vec![32, 16] }
+    }
+
+    /// The paper's appendix sizes (64^3 input into a 128^3 grid, 512^2 image); for real GPUs.
+    pub fn paper() -> Preset {
+        Preset {
+            name: "paper",
+            input: 64,
+            cam: 128,
+            c3: [8, 16],
+            res3d: 10,
+            proj: 1024,
+            c2: 1024,
+            res2d: 10,
+            up: vec![128, 64, 32],
+        }
+    }
+
+    /// Looks a preset up by name.
+    pub fn by_name(name: &str) -> Result<Preset> {
+        match name {
+            "tiny" => Ok(Self::tiny()),
+            "paper" => Ok(Self::paper()),
+            _ => Err(Error::Invalid(format!("unknown preset '{name}'; expected tiny or paper"))),
+        }
+    }
+
+    /// Image side for a camera grid of side `cam_hw`.
+    pub fn image_for(&self, cam_hw: usize) -> usize {
+        cam_hw / 2 * (1 << self.up.len())
+    }
+
+    /// Depth of the camera grid after the two 3D convs (stride 2, then depth stride 2).
+    fn depth_after(&self) -> usize {
+        self.cam.div_ceil(2).div_ceil(2)
+    }
+}
+
+/// What the network renders.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Head {
+    /// Normal, albedo and mask maps shaded by the Phong op with the input light.
+    Phong(Phong),
+    /// One image with this many channels (toon, contour: 1; AO: 1).
+    Image(usize),
+}
+
+/// The Phong constants the reference renderer uses for `light`, for the Phong head.
+pub fn phong_of(light: &Light) -> Phong {
+    Phong { ambient: light.ambient, kd: light.kd, ks: light.ks, shininess: light.shininess }
+}
+
+/// A built network and the values a caller feeds and reads.
+pub struct RenderNet {
+    /// The graph (hand it to an `Executor`).
+    pub graph: Graph,
+    /// Input grid `[N, 1, R, R, R]` (axes as `camera::input_values`).
+    pub grid: Value,
+    /// Pose `[N, 6]` (`camera::pose_for_view`).
+    pub pose: Value,
+    /// Light `[N, 6]` (`camera::light_values`); Phong head only.
+    pub light: Option<Value>,
+    /// The rendered image `[N, 3 or C, S, S]`.
+    pub image: Value,
+    /// Normal, albedo and mask maps (Phong head only).
+    pub maps: Option<[Value; 3]>,
+    /// Training targets and the loss, when built with `with_loss`.
+    pub targets: Vec<(String, Value)>,
+    /// The scalar loss.
+    pub loss: Option<Value>,
+}
+
+struct Builder<'a> {
+    g: &'a mut Graph,
+}
+
+impl Builder<'_> {
+    fn param(&mut self, name: &str, shape: &[usize], init: Init) -> Result<Value> {
+        self.g.param(name, shape, init)
+    }
+
+    fn conv(&mut self, name: &str, x: Value, cout: usize, conv: Conv) -> Result<Value> {
+        let cin = self.g.info(x).shape[1];
+        let mut wshape = vec![cout, cin];
+        let rank = self.g.info(x).shape.len();
+        wshape.extend(&conv.kernel[5 - rank..]);
+        let w = self.param(&format!("{name}.weight"), &wshape, Init::Xavier)?;
+        let b = self.param(&format!("{name}.bias"), &[cout], Init::Constant(0.001))?;
+        self.g.apply(name, Op::Conv(conv), &[x, w, b])
+    }
+
+    fn up(&mut self, name: &str, x: Value, cout: usize) -> Result<Value> {
+        let cin = self.g.info(x).shape[1];
+        let w = self.param(&format!("{name}.weight"), &[cin, cout, 4, 4], Init::Xavier)?;
+        let b = self.param(&format!("{name}.bias"), &[cout], Init::Constant(0.001))?;
+        let t = ConvTranspose::conv2d([4, 4], [2, 2], Padding::Same);
+        self.g.apply(name, Op::ConvTranspose(t), &[x, w, b])
+    }
+
+    fn prelu(&mut self, name: &str, x: Value) -> Result<Value> {
+        let c = self.g.info(x).shape[1];
+        let a = self.param(&format!("{name}.alpha"), &[c], Init::Constant(0.0))?;
+        self.g.apply(name, Op::Prelu, &[x, a])
+    }
+
+    /// conv - PReLU - conv + identity, the paper's residual block (3^3 or 3x3).
+    fn residual(&mut self, name: &str, x: Value, conv: Conv) -> Result<Value> {
+        let c = self.g.info(x).shape[1];
+        let h = self.conv(&format!("{name}.conv1"), x, c, conv.clone())?;
+        let h = self.prelu(&format!("{name}.act"), h)?;
+        let h = self.conv(&format!("{name}.conv2"), h, c, conv)?;
+        self.g.apply(&format!("{name}.add"), Op::Add, &[h, x])
+    }
+
+    fn head(&mut self, name: &str, x: Value, c: usize) -> Result<Value> {
+        let h = self.conv(name, x, c, Conv::conv2d([3, 3], [1, 1], Padding::Same))?;
+        self.g.apply(&format!("{name}.sigmoid"), Op::Sigmoid, &[h])
+    }
+}
+
+impl RenderNet {
+    /// Builds the network for batch `n` on a camera-grid window of `cam_hw` = `[H, W]`
+    /// (the full `[cam, cam]` to render, smaller windows for patch training; depth is always
+    /// whole). With `with_loss`, adds target inputs and the training loss: for Phong,
+    /// MSE(image) + MSE(normal map) + BCE(mask); for an image head, BCE (greyscale).
+    pub fn build(p: &Preset, head: Head, n: usize, cam_hw: [usize; 2], with_loss: bool) -> Result<RenderNet> {
+        if cam_hw.iter().any(|&s| s % 4 != 0 || s == 0) {
+            return Err(Error::Invalid(format!("camera window {cam_hw:?}: sides must be positive multiples of 4")));
+        }
+        let mut g = Graph::new();
+        let mut b = Builder { g: &mut g };
+        let r = p.input;
+        let grid = b.g.input("grid", &[n, 1, r, r, r])?;
+        let pose = b.g.input("pose", &[n, 6])?;
+        let x = b.g.apply("resample", Op::Resample([p.cam, cam_hw[0], cam_hw[1]]), &[grid, pose])?;
+        let x = b.conv("enc3d.conv1", x, p.c3[0], Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same))?;
+        let x = b.prelu("enc3d.act1", x)?;
+        let x = b.conv("enc3d.conv2", x, p.c3[1], Conv::conv3d([3, 3, 3], [2, 1, 1], Padding::Same))?;
+        let mut x = b.prelu("enc3d.act2", x)?;
+        for i in 0..p.res3d {
+            x = b.residual(&format!("res3d.{i}"), x, Conv::conv3d([3, 3, 3], [1, 1, 1], Padding::Same))?;
+        }
+        debug_assert_eq!(b.g.info(x).shape[2], p.depth_after());
+        let k = p.c3[1] * p.depth_after();
+        let w = b.param("proj.weight", &[p.proj, k, 1, 1], Init::Xavier)?;
+        let bias = b.param("proj.bias", &[p.proj], Init::Constant(0.001))?;
+        let x = b.g.apply("proj", Op::Projection, &[x, w, bias])?;
+        let x = b.prelu("proj.act", x)?;
+        let x = b.conv("enc2d.conv", x, p.c2, Conv::conv2d([3, 3], [1, 1], Padding::Same))?;
+        let mut x = b.prelu("enc2d.act", x)?;
+        for i in 0..p.res2d {
+            x = b.residual(&format!("res2d.{i}"), x, Conv::conv2d([3, 3], [1, 1], Padding::Same))?;
+        }
+        for (i, &c) in p.up.iter().enumerate() {
+            x = b.up(&format!("up.{i}"), x, c)?;
+            x = b.prelu(&format!("up.{i}.act"), x)?;
+        }
+        let s = b.g.info(x).shape.clone();
+        let (hh, ww) = (s[2], s[3]);
+        let (image, maps, light) = match head {
+            Head::Phong(ph) => {
+                let normal = b.head("head.normal", x, 3)?;
+                let albedo = b.head("head.albedo", x, 1)?;
+                let mask = b.head("head.mask", x, 1)?;
+                let light = b.g.input("light", &[n, 6])?;
+                let img = b.g.apply("phong", Op::Phong(ph), &[normal, albedo, mask, light])?;
+                (img, Some([normal, albedo, mask]), Some(light))
+            }
+            Head::Image(c) => (b.head("head.image", x, c)?, None, None),
+        };
+        let mut targets = Vec::new();
+        let mut loss = None;
+        if with_loss {
+            let mut t = |g: &mut Graph, name: &str, c: usize| -> Result<Value> {
+                let v = g.input(&format!("target.{name}"), &[n, c, hh, ww])?;
+                targets.push((name.to_string(), v));
+                Ok(v)
+            };
+            loss = Some(match (head, maps) {
+                (Head::Phong(_), Some([normal, _, mask])) => {
+                    let ti = t(&mut g, "phong", 3)?;
+                    let tn = t(&mut g, "normal", 3)?;
+                    let tm = t(&mut g, "mask", 1)?;
+                    let li = g.apply("loss.phong", Op::Loss(Loss::Mse), &[image, ti])?;
+                    let ln = g.apply("loss.normal", Op::Loss(Loss::Mse), &[normal, tn])?;
+                    let lm = g.apply("loss.mask", Op::Loss(Loss::Bce), &[mask, tm])?;
+                    let l = g.apply("loss.sum1", Op::Add, &[li, ln])?;
+                    g.apply("loss", Op::Add, &[l, lm])?
+                }
+                _ => {
+                    let c = g.info(image).shape[1];
+                    let ti = t(&mut g, "image", c)?;
+                    g.apply("loss", Op::Loss(Loss::Bce), &[image, ti])?
+                }
+            });
+        }
+        Ok(RenderNet { graph: g, grid, pose, light, image, maps, targets, loss })
+    }
+}
+
+/// Feeds helper: the pose and light rows for one sample.
+pub fn sample_inputs(p: &Preset, view: &crate::reference::View, light: &Light, cam_hw: usize, crop: Option<[usize; 4]>) -> ([f32; 6], [f32; 6]) {
+    (camera::pose_for_view(view, p.input, cam_hw, crop), camera::light_values(light))
+}

@@ -1,0 +1,172 @@
+//! Training RenderNet: patch training with growing crops, Adam with the original code's
+//! exponential decay, periodic held-out evaluation, atomic checkpoints and resume.
+
+pub mod batch;
+pub mod eval;
+pub mod plot;
+
+use crate::data::{Dataset, Split};
+use crate::error::{Error, Result};
+use crate::graph::Executor;
+use crate::graph::schedule::exponential_decay;
+use crate::nn::rendernet::{Head, Preset, RenderNet, phong_of};
+use crate::ops::adam::Adam;
+use crate::gpu::Gpu;
+use batch::Batch;
+use std::path::PathBuf;
+
+/// How to train.
+#[derive(Clone, Debug)]
+pub struct TrainConfig {
+    /// Network sizes.
+    pub preset: Preset,
+    /// Dataset directory (`rendernet dataset` output).
+    pub data: PathBuf,
+    /// Checkpoint path; the weights, the curve and the log go next to it.
+    pub out: PathBuf,
+    /// Total optimizer steps.
+    pub steps: u64,
+    /// Checkpoint to resume from.
+    pub resume: Option<PathBuf>,
+    /// Batch size.
+    pub batch: usize,
+    /// Initial learning rate.
+    pub lr: f32,
+    /// Exponential decay rate per `decay_steps` (the original code: 0.96).
+    pub decay: f32,
+    /// Steps per decay period.
+    pub decay_steps: u64,
+    /// Seed for initialisation, sampling and crops.
+    pub seed: u64,
+    /// Steps between evaluations + checkpoints.
+    pub eval_every: u64,
+    /// Held-out samples per evaluation (0 = all).
+    pub eval_samples: usize,
+}
+
+/// Reported to the caller (the CLI draws a progress bar from it).
+#[derive(Clone, Debug)]
+pub enum Progress {
+    /// A training step finished.
+    Step { step: u64, loss: f32, lr: f32, window: usize, images_per_s: f32 },
+    /// An evaluation finished and a checkpoint was written.
+    Eval { step: u64, psnr: f32, checkpoint: PathBuf },
+}
+
+/// The camera-grid window side at `step`: the paper's patch schedule, growing from 1/8 to
+/// 1/2 of the grid in three equal phases (depth always whole).
+pub fn window_at(p: &Preset, step: u64, steps: u64) -> usize {
+    let phase = (3 * step / steps.max(1)).min(2);
+    (p.cam >> (3 - phase)).max(4)
+}
+
+fn rng_next(state: &mut u64) -> u64 {
+    *state = state.wrapping_add(0x9E3779B97F4A7C15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+    z ^ (z >> 31)
+}
+
+/// The head a dataset's shader needs.
+pub fn head_for(ds: &Dataset) -> Result<Head> {
+    let shader = ds.manifest.shader_kind()?;
+    Ok(match shader {
+        crate::reference::Shader::Phong => {
+            let l = &ds.manifest.light;
+            Head::Phong(phong_of(&crate::reference::Light { ambient: l.ambient, kd: l.kd, ks: l.ks, shininess: l.shininess, ..Default::default() }))
+        }
+        s => Head::Image(s.channels()),
+    })
+}
+
+struct Phase {
+    window: usize,
+    net: RenderNet,
+    ex: Executor,
+}
+
+fn phase(gpu: &Gpu, cfg: &TrainConfig, head: Head, window: usize, from: Option<&std::path::Path>) -> Result<Phase> {
+    let net = RenderNet::build(&cfg.preset, head, cfg.batch, [window, window], true)?;
+    let mut ex = Executor::new(gpu, net.graph.clone(), cfg.seed)?;
+    if let Some(ckpt) = from {
+        ex.load_checkpoint(gpu, ckpt)?;
+    }
+    Ok(Phase { window, net, ex })
+}
+
+/// Trains as configured, calling `report` after every step and evaluation. Returns the
+/// final held-out PSNR.
+pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> Result<f32> {
+    let ds = Dataset::open(&cfg.data)?;
+    let train = ds.split(Split::Train);
+    if train.is_empty() {
+        return Err(Error::Invalid(format!("{}: the train split is empty", cfg.data.display())));
+    }
+    let head = head_for(&ds)?;
+    let p = &cfg.preset;
+    let resume = cfg.resume.as_deref();
+    let mut start = 0;
+    if let Some(r) = resume {
+        // The step decides the phase; the checkpoint is loaded into that phase's graph.
+        let (_, meta) = crate::graph::params::load_safetensors(r)?;
+        start = meta.get("step").and_then(|s| s.parse().ok()).unwrap_or(0);
+    }
+    let mut cur = phase(gpu, cfg, head, window_at(p, start, cfg.steps), resume)?;
+    let names: Vec<String> = cur.net.targets.iter().map(|(n, _)| n.clone()).collect();
+    let mut rng = cfg.seed ^ 0x5EED ^ start.wrapping_mul(0x2545F4914F6CDD1D);
+    let mut curve = (Vec::new(), Vec::new());
+    let mut psnr = f32::NAN;
+    let t0 = std::time::Instant::now();
+    for step in start..cfg.steps {
+        let w = window_at(p, step, cfg.steps);
+        if w != cur.window {
+            cur.ex.save_checkpoint(gpu, &cfg.out)?;
+            cur = phase(gpu, cfg, head, w, Some(&cfg.out))?;
+        }
+        let mut b = Batch::default();
+        for _ in 0..cfg.batch {
+            let i = (rng_next(&mut rng) % train.len() as u64) as usize;
+            let h0 = (rng_next(&mut rng) % (p.cam - w + 1) as u64) as usize;
+            let w0 = (rng_next(&mut rng) % (p.cam - w + 1) as u64) as usize;
+            b.push(p, &train.get(i)?, [h0, w0, w, w], &names)?;
+        }
+        feed(gpu, &cur, &b)?;
+        let lr = exponential_decay(cfg.lr, cfg.decay, cfg.decay_steps, step, false);
+        let ts = std::time::Instant::now();
+        cur.ex.train_step(gpu, cur.net.loss.expect("built with loss"), &Adam::new(lr))?;
+        let loss = cur.ex.read(gpu, cur.net.loss.expect("built with loss"))?[0];
+        if !loss.is_finite() {
+            return Err(Error::Invalid(format!("step {step}: the loss is {loss}; stopping before the weights go bad (last checkpoint: {})", cfg.out.display())));
+        }
+        curve.0.push((step + 1, loss));
+        let ips = cfg.batch as f32 / ts.elapsed().as_secs_f32();
+        report(Progress::Step { step: step + 1, loss, lr, window: w, images_per_s: ips });
+        let last = step + 1 == cfg.steps;
+        if (step + 1) % cfg.eval_every == 0 || last {
+            cur.ex.save_checkpoint(gpu, &cfg.out)?;
+            let params = cfg.out.with_extension("weights.safetensors");
+            cur.ex.save_params(gpu, &params)?;
+            psnr = eval::evaluate(gpu, p, head, &params, &ds, cfg.eval_samples)?.mean;
+            curve.1.push((step + 1, psnr));
+            let _ = plot::write_curve(&cfg.out.with_extension("curve.png"), &curve.0, &curve.1);
+            report(Progress::Eval { step: step + 1, psnr, checkpoint: cfg.out.clone() });
+        }
+    }
+    let _ = t0;
+    Ok(psnr)
+}
+
+fn feed(gpu: &Gpu, ph: &Phase, b: &Batch) -> Result<()> {
+    let (ex, net) = (&ph.ex, &ph.net);
+    ex.feed(gpu, net.grid, &b.grid)?;
+    ex.feed(gpu, net.pose, &b.pose)?;
+    if let Some(l) = net.light {
+        ex.feed(gpu, l, &b.light)?;
+    }
+    for (name, v) in &net.targets {
+        let vals = &b.targets.iter().find(|(n, _)| n == name).expect("pushed every target").1;
+        ex.feed(gpu, *v, vals)?;
+    }
+    Ok(())
+}
