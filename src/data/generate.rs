@@ -9,7 +9,8 @@
 //! camera, white.
 
 use super::{
-    GRIDS, LIGHTS, LightParams, MANIFEST, Manifest, SHAPE_IDS, SHARD_SIZE, SplitInfo, Split, VIEWS, image_outputs,
+    GRIDS, LIGHTS, LightParams, MANIFEST, Manifest, SHAPE_IDS, SHARD_SIZE, Split, SplitInfo, VIEWS,
+    image_outputs,
 };
 use crate::error::{Error, Result};
 use crate::gpu::{Gpu, Tensor};
@@ -109,7 +110,11 @@ pub fn sample_poses(shape_seed: u64, views: usize) -> Vec<([f32; 3], [f32; 5])> 
     let mut rng = Rng::new(shape_seed, VIEW_STREAM);
     (0..views)
         .map(|_| {
-            let v = [rng.range(0.0, 360.0), rng.range(10.0, 170.0), rng.range(3.0, 6.3)];
+            let v = [
+                rng.range(0.0, 360.0),
+                rng.range(10.0, 170.0),
+                rng.range(3.0, 6.3),
+            ];
             let l = [rng.range(0.0, 360.0), rng.range(20.0, 160.0), 1.0, 1.0, 1.0];
             (v, l)
         })
@@ -118,12 +123,19 @@ pub fn sample_poses(shape_seed: u64, views: usize) -> Vec<([f32; 3], [f32; 5])> 
 
 /// Mesh files under `dir` (.obj, .off, .ply), sorted by name.
 pub fn real_meshes(dir: &Path) -> Result<Vec<PathBuf>> {
-    let io = |e| Error::Io { path: dir.display().to_string(), source: e };
+    let io = |e| Error::Io {
+        path: dir.display().to_string(),
+        source: e,
+    };
     let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
         .map_err(io)?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| {
-            let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+            let ext = p
+                .extension()
+                .and_then(|e| e.to_str())
+                .unwrap_or("")
+                .to_ascii_lowercase();
             matches!(ext.as_str(), "obj" | "off" | "ply")
         })
         .collect();
@@ -136,18 +148,34 @@ fn verr(e: crate::voxel::VoxelError) -> Error {
 }
 
 /// The input grid (`res`) and the truth grid (`truth_res`) of shape `i`.
-fn shape_grids(o: &GenerateOptions, meshes: &[PathBuf], i: usize) -> Result<(VoxelGrid, VoxelGrid)> {
+fn shape_grids(
+    o: &GenerateOptions,
+    meshes: &[PathBuf],
+    i: usize,
+) -> Result<(VoxelGrid, VoxelGrid)> {
     let family = match o.shapes {
         Shapes::Chairs => Family::Chair,
         Shapes::Mixed => Family::ALL[i % Family::ALL.len()],
         Shapes::Real => {
             let mesh = Mesh::load(&meshes[i]).map_err(verr)?;
-            let grid = |n| voxelize(&mesh, &VoxelizeOptions { resolution: n, ..Default::default() }).map_err(verr);
+            let grid = |n| {
+                voxelize(
+                    &mesh,
+                    &VoxelizeOptions {
+                        resolution: n,
+                        ..Default::default()
+                    },
+                )
+                .map_err(verr)
+            };
             return Ok((grid(o.res)?, grid(o.truth_res)?));
         }
     };
     let shape = family.generate(shape_seed(o.seed, i));
-    Ok((shape.to_grid(o.res).map_err(verr)?, shape.to_grid(o.truth_res).map_err(verr)?))
+    Ok((
+        shape.to_grid(o.res).map_err(verr)?,
+        shape.to_grid(o.truth_res).map_err(verr)?,
+    ))
 }
 
 /// Samples of one shard being filled.
@@ -184,6 +212,9 @@ fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<()> {
 
 /// The generator's state while it runs.
 struct Writer<'a> {
+    gpu: &'a Gpu,
+    renderer: Renderer,
+    meshes: Vec<PathBuf>,
     o: &'a GenerateOptions,
     dir: &'a Path,
     outputs: Vec<(&'static str, Shader, usize)>,
@@ -198,15 +229,32 @@ impl Writer<'_> {
         let b = std::mem::take(&mut self.buf);
         let (n, r, s) = (b.len, self.o.res, self.o.image);
         let (views, lights, ids) = (le(&b.views), le(&b.lights), le(&b.shape_ids));
-        let err = |e: safetensors::SafeTensorError| Error::Invalid(format!("encoding a {} shard: {e}", split.name()));
+        let err = |e: safetensors::SafeTensorError| {
+            Error::Invalid(format!("encoding a {} shard: {e}", split.name()))
+        };
         let mut t = vec![
-            (GRIDS, TensorView::new(Dtype::U8, vec![n, r, r, r], &b.grids).map_err(err)?),
-            (VIEWS, TensorView::new(Dtype::F32, vec![n, 3], &views).map_err(err)?),
-            (LIGHTS, TensorView::new(Dtype::F32, vec![n, 5], &lights).map_err(err)?),
-            (SHAPE_IDS, TensorView::new(Dtype::F32, vec![n], &ids).map_err(err)?),
+            (
+                GRIDS,
+                TensorView::new(Dtype::U8, vec![n, r, r, r], &b.grids).map_err(err)?,
+            ),
+            (
+                VIEWS,
+                TensorView::new(Dtype::F32, vec![n, 3], &views).map_err(err)?,
+            ),
+            (
+                LIGHTS,
+                TensorView::new(Dtype::F32, vec![n, 5], &lights).map_err(err)?,
+            ),
+            (
+                SHAPE_IDS,
+                TensorView::new(Dtype::F32, vec![n], &ids).map_err(err)?,
+            ),
         ];
         for ((name, _, c), data) in self.outputs.iter().zip(&b.images) {
-            t.push((name, TensorView::new(Dtype::U8, vec![n, *c, s, s], data).map_err(err)?));
+            t.push((
+                name,
+                TensorView::new(Dtype::U8, vec![n, *c, s, s], data).map_err(err)?,
+            ));
         }
         let bytes = safetensors::serialize(t, None).map_err(err)?;
         let name = split.shard_name(info.shards.len());
@@ -218,16 +266,13 @@ impl Writer<'_> {
     /// Renders every view of shape `i` and appends the samples, flushing full shards.
     fn shape(
         &mut self,
-        gpu: &Gpu,
-        renderer: &Renderer,
-        meshes: &[PathBuf],
         i: usize,
         split: Split,
         info: &mut SplitInfo,
         bar: &indicatif::ProgressBar,
     ) -> Result<()> {
-        let o = self.o;
-        let (input, truth) = shape_grids(o, meshes, i)?;
+        let (o, gpu) = (self.o, self.gpu);
+        let (input, truth) = shape_grids(o, &self.meshes, i)?;
         let grid_u8: Vec<u8> = input.occupancy().iter().map(|&v| to_u8(v)).collect();
         let g = GpuGrid::upload(gpu, &truth)?;
         let poses = sample_poses(shape_seed(o.seed, i), o.views);
@@ -235,17 +280,33 @@ impl Writer<'_> {
         for chunk in poses.chunks(VIEWS_PER_SUBMIT) {
             let outs: Vec<Vec<Tensor>> = chunk
                 .iter()
-                .map(|_| self.outputs.iter().map(|&(_, sh, _)| Tensor::zeros(gpu, &[sh.channels(), o.image, o.image])).collect())
+                .map(|_| {
+                    self.outputs
+                        .iter()
+                        .map(|&(_, sh, _)| Tensor::zeros(gpu, &[sh.channels(), o.image, o.image]))
+                        .collect()
+                })
                 .collect::<Result<_>>()?;
             let lights: Vec<Light> = chunk
                 .iter()
-                .map(|(_, l)| Light { azimuth: l[0] as f64, elevation: l[1] as f64, colour: [l[2], l[3], l[4]], ..light_params })
+                .map(|(_, l)| Light {
+                    azimuth: l[0] as f64,
+                    elevation: l[1] as f64,
+                    colour: [l[2], l[3], l[4]],
+                    ..light_params
+                })
                 .collect();
             gpu.run(|pass| {
                 for (((v, _), light), ts) in chunk.iter().zip(&lights).zip(&outs) {
-                    let view = View { azimuth: v[0] as f64, elevation: v[1] as f64, radius: v[2] as f64 };
-                    let pairs: Vec<(Shader, &Tensor)> = self.outputs.iter().map(|o| o.1).zip(ts).collect();
-                    renderer.record_many(gpu, pass, &g, &view, light, &pairs)?;
+                    let view = View {
+                        azimuth: v[0] as f64,
+                        elevation: v[1] as f64,
+                        radius: v[2] as f64,
+                    };
+                    let pairs: Vec<(Shader, &Tensor)> =
+                        self.outputs.iter().map(|o| o.1).zip(ts).collect();
+                    self.renderer
+                        .record_many(gpu, pass, &g, &view, light, &pairs)?;
                 }
                 Ok(())
             })?;
@@ -258,7 +319,9 @@ impl Writer<'_> {
                 self.buf.views.extend_from_slice(v);
                 self.buf.lights.extend_from_slice(l);
                 self.buf.shape_ids.push(i as f32);
-                for ((_, _, c), (t, img)) in self.outputs.iter().zip(ts.iter().zip(&mut self.buf.images)) {
+                for ((_, _, c), (t, img)) in
+                    self.outputs.iter().zip(ts.iter().zip(&mut self.buf.images))
+                {
                     // Grey outputs rendered as RGB (albedo) keep channel 0 only.
                     let data = t.to_vec(gpu)?;
                     img.extend(data[..c * o.image * o.image].iter().map(|&x| to_u8(x)));
@@ -277,13 +340,25 @@ impl Writer<'_> {
 fn validate(o: &GenerateOptions) -> Result<()> {
     let bad = |m: String| Err(Error::Invalid(format!("dataset: {m}")));
     if o.count == 0 || o.views == 0 {
-        return bad(format!("count ({}) and views ({}) must be at least 1", o.count, o.views));
+        return bad(format!(
+            "count ({}) and views ({}) must be at least 1",
+            o.count, o.views
+        ));
     }
-    if !(1..=1024).contains(&o.res) || !(1..=1024).contains(&o.truth_res) || !(1..=8192).contains(&o.image) {
-        return bad(format!("res {} and truth_res {} must be in 1..=1024, image {} in 1..=8192", o.res, o.truth_res, o.image));
+    if !(1..=1024).contains(&o.res)
+        || !(1..=1024).contains(&o.truth_res)
+        || !(1..=8192).contains(&o.image)
+    {
+        return bad(format!(
+            "res {} and truth_res {} must be in 1..=1024, image {} in 1..=8192",
+            o.res, o.truth_res, o.image
+        ));
     }
     if !(0.0..=1.0).contains(&o.test_fraction) {
-        return bad(format!("test fraction {} is outside [0, 1]", o.test_fraction));
+        return bad(format!(
+            "test fraction {} is outside [0, 1]",
+            o.test_fraction
+        ));
     }
     Ok(())
 }
@@ -294,7 +369,11 @@ fn validate(o: &GenerateOptions) -> Result<()> {
 pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path) -> Result<Summary> {
     let t0 = Instant::now();
     validate(o)?;
-    let meshes = if o.shapes == Shapes::Real { real_meshes(&o.real_dir)? } else { Vec::new() };
+    let meshes = if o.shapes == Shapes::Real {
+        real_meshes(&o.real_dir)?
+    } else {
+        Vec::new()
+    };
     if o.shapes == Shapes::Real && meshes.len() < o.count {
         return Err(Error::Invalid(format!(
             "{}: {} meshes (.obj/.off/.ply) but --count {} asked for; run datasets/fetch_real.sh or lower --count",
@@ -303,28 +382,55 @@ pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path) -> Result<Summary> {
             o.count
         )));
     }
-    let io = |e| Error::Io { path: dir.display().to_string(), source: e };
+    let io = |e| Error::Io {
+        path: dir.display().to_string(),
+        source: e,
+    };
     std::fs::create_dir_all(dir).map_err(io)?;
     for e in std::fs::read_dir(dir).map_err(io)?.flatten() {
         let name = e.file_name().to_string_lossy().to_string();
-        let ours = (name.starts_with("train-") || name.starts_with("test-")) && name.ends_with(".safetensors");
+        let ours = (name.starts_with("train-") || name.starts_with("test-"))
+            && name.ends_with(".safetensors");
         if ours || name == MANIFEST {
-            std::fs::remove_file(e.path()).map_err(|err| Error::Io { path: e.path().display().to_string(), source: err })?;
+            std::fs::remove_file(e.path()).map_err(|err| Error::Io {
+                path: e.path().display().to_string(),
+                source: err,
+            })?;
         }
     }
     let n_test = ((o.test_fraction * o.count as f64).ceil() as usize).min(o.count);
     let n_train = o.count - n_test;
-    let renderer = Renderer::new(gpu).with_options(Options { supersample: o.supersample, ..Options::default() });
-    let bar = if o.progress { indicatif::ProgressBar::new((o.count * o.views) as u64) } else { indicatif::ProgressBar::hidden() };
+    let renderer = Renderer::new(gpu).with_options(Options {
+        supersample: o.supersample,
+        ..Options::default()
+    });
+    let bar = if o.progress {
+        indicatif::ProgressBar::new((o.count * o.views) as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
     bar.set_style(
-        indicatif::ProgressStyle::with_template("{elapsed_precise} {wide_bar} {pos}/{len} samples {per_sec} eta {eta}")
-            .expect("valid template"),
+        indicatif::ProgressStyle::with_template(
+            "{elapsed_precise} {wide_bar} {pos}/{len} samples {per_sec} eta {eta}",
+        )
+        .expect("valid template"),
     );
-    let mut w = Writer { o, dir, outputs: image_outputs(o.shader), buf: ShardBuf::default() };
+    let mut w = Writer {
+        gpu,
+        renderer,
+        meshes,
+        o,
+        dir,
+        outputs: image_outputs(o.shader),
+        buf: ShardBuf::default(),
+    };
     let (mut train, mut test) = (SplitInfo::default(), SplitInfo::default());
-    for (split, range, info) in [(Split::Train, 0..n_train, &mut train), (Split::Test, n_train..o.count, &mut test)] {
+    for (split, range, info) in [
+        (Split::Train, 0..n_train, &mut train),
+        (Split::Test, n_train..o.count, &mut test),
+    ] {
         for i in range.clone() {
-            w.shape(gpu, &renderer, &meshes, i, split, info, &bar)?;
+            w.shape(i, split, info, &bar)?;
         }
         w.flush(split, info)?;
         info.count = range.len() * o.views;
@@ -345,5 +451,8 @@ pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path) -> Result<Summary> {
         test_fraction: o.test_fraction,
     };
     write_atomic(dir, MANIFEST, manifest.to_json().as_bytes())?;
-    Ok(Summary { manifest, seconds: t0.elapsed().as_secs_f64() })
+    Ok(Summary {
+        manifest,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
 }

@@ -21,7 +21,12 @@ pub struct LightParams {
 
 impl From<&Light> for LightParams {
     fn from(l: &Light) -> Self {
-        LightParams { ambient: l.ambient, kd: l.kd, ks: l.ks, shininess: l.shininess }
+        LightParams {
+            ambient: l.ambient,
+            kd: l.kd,
+            ks: l.ks,
+            shininess: l.shininess,
+        }
     }
 }
 
@@ -66,7 +71,8 @@ pub struct Manifest {
 impl Manifest {
     /// The shader as an enum.
     pub fn shader_kind(&self) -> Result<Shader> {
-        Shader::parse(&self.shader).ok_or_else(|| Error::Invalid(format!("manifest: unknown shader `{}`", self.shader)))
+        Shader::parse(&self.shader)
+            .ok_or_else(|| Error::Invalid(format!("manifest: unknown shader `{}`", self.shader)))
     }
 
     /// The JSON text written to disk.
@@ -92,11 +98,22 @@ impl Manifest {
 
     /// Parses and checks manifest text; `file` names it in errors, with the offending field.
     pub fn parse(text: &str, file: &str) -> Result<Manifest> {
-        let bad = |field: &str, msg: &str| Error::Invalid(format!("{file}: field `{field}`: {msg}"));
-        let v: Value = serde_json::from_str(text).map_err(|e| Error::Invalid(format!("{file}: not valid JSON: {e}")))?;
+        let bad =
+            |field: &str, msg: &str| Error::Invalid(format!("{file}: field `{field}`: {msg}"));
+        let v: Value = serde_json::from_str(text)
+            .map_err(|e| Error::Invalid(format!("{file}: not valid JSON: {e}")))?;
         let get = |k: &str| v.get(k).ok_or_else(|| bad(k, "missing"));
-        let string = |k: &str| get(k)?.as_str().map(str::to_string).ok_or_else(|| bad(k, "expected a string"));
-        let uint = |k: &str| get(k)?.as_u64().ok_or_else(|| bad(k, "expected a non-negative integer"));
+        let string = |k: &str| {
+            get(k)?
+                .as_str()
+                .map(str::to_string)
+                .ok_or_else(|| bad(k, "expected a string"))
+        };
+        let uint = |k: &str| {
+            get(k)?
+                .as_u64()
+                .ok_or_else(|| bad(k, "expected a non-negative integer"))
+        };
         let size = |k: &str, max: u64| match uint(k)? {
             n if (1..=max).contains(&n) => Ok(n as usize),
             n => Err(bad(k, &format!("{n} is outside 1..={max}"))),
@@ -108,32 +125,60 @@ impl Manifest {
         let lv = get("light")?;
         let lf = |k: &str| {
             let f = format!("light.{k}");
-            lv.get(k).ok_or_else(|| bad(&f, "missing"))?.as_f64().map(|x| x as f32).ok_or_else(|| bad(&f, "expected a number"))
+            lv.get(k)
+                .ok_or_else(|| bad(&f, "missing"))?
+                .as_f64()
+                .map(|x| x as f32)
+                .ok_or_else(|| bad(&f, "expected a number"))
         };
-        let light = LightParams { ambient: lf("ambient")?, kd: lf("kd")?, ks: lf("ks")?, shininess: lf("shininess")? };
+        let light = LightParams {
+            ambient: lf("ambient")?,
+            kd: lf("kd")?,
+            ks: lf("ks")?,
+            shininess: lf("shininess")?,
+        };
         let views = size("views", 1 << 20)?;
         let split = |s: Split| -> Result<SplitInfo> {
             let name = s.name();
             let sv = get(name)?;
-            let count = sv
-                .get("count")
-                .and_then(Value::as_u64)
-                .ok_or_else(|| bad(&format!("{name}.count"), "missing or not a non-negative integer"))?
-                as usize;
+            let count = sv.get("count").and_then(Value::as_u64).ok_or_else(|| {
+                bad(
+                    &format!("{name}.count"),
+                    "missing or not a non-negative integer",
+                )
+            })? as usize;
             let shards: Vec<String> = sv
                 .get("shards")
                 .and_then(Value::as_array)
                 .and_then(|a| a.iter().map(|x| x.as_str().map(str::to_string)).collect())
-                .ok_or_else(|| bad(&format!("{name}.shards"), "missing or not an array of strings"))?;
+                .ok_or_else(|| {
+                    bad(
+                        &format!("{name}.shards"),
+                        "missing or not an array of strings",
+                    )
+                })?;
             if shards.len() != count.div_ceil(SHARD_SIZE) {
-                let msg = format!("{} shards for {count} samples, expected {}", shards.len(), count.div_ceil(SHARD_SIZE));
+                let msg = format!(
+                    "{} shards for {count} samples, expected {}",
+                    shards.len(),
+                    count.div_ceil(SHARD_SIZE)
+                );
                 return Err(bad(&format!("{name}.shards"), &msg));
             }
-            if let Some(s) = shards.iter().find(|s| s.contains('/') || s.contains('\\') || s.starts_with('.')) {
-                return Err(bad(&format!("{name}.shards"), &format!("`{s}` must be a plain file name")));
+            if let Some(s) = shards
+                .iter()
+                .find(|s| s.contains('/') || s.contains('\\') || s.starts_with('.'))
+            {
+                return Err(bad(
+                    &format!("{name}.shards"),
+                    &format!("`{s}` must be a plain file name"),
+                ));
             }
-            if count % views != 0 {
-                return Err(bad(&format!("{name}.count"), &format!("{count} is not a multiple of views = {views}")));
+            if !count.is_multiple_of(views) {
+                return Err(bad(
+                    &format!("{name}.count"),
+                    &format!("{count} is not a multiple of views = {views}"),
+                ));
             }
             Ok(SplitInfo { count, shards })
         };
@@ -149,9 +194,13 @@ impl Manifest {
             train: split(Split::Train)?,
             test: split(Split::Test)?,
             supersample: v.get("supersample").and_then(Value::as_u64).unwrap_or(1) as u32,
-            test_fraction: v.get("test_fraction").and_then(Value::as_f64).unwrap_or(0.0),
+            test_fraction: v
+                .get("test_fraction")
+                .and_then(Value::as_f64)
+                .unwrap_or(0.0),
         };
-        m.shader_kind().map_err(|_| bad("shader", &format!("unknown shader `{}`", m.shader)))?;
+        m.shader_kind()
+            .map_err(|_| bad("shader", &format!("unknown shader `{}`", m.shader)))?;
         Ok(m)
     }
 }

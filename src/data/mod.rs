@@ -135,10 +135,18 @@ impl Dataset {
     pub fn open(dir: impl AsRef<Path>) -> Result<Dataset> {
         let dir = dir.as_ref().to_path_buf();
         let mpath = dir.join(MANIFEST);
-        let text = std::fs::read_to_string(&mpath).map_err(|e| Error::Io { path: mpath.display().to_string(), source: e })?;
+        let text = std::fs::read_to_string(&mpath).map_err(|e| Error::Io {
+            path: mpath.display().to_string(),
+            source: e,
+        })?;
         let manifest = Manifest::parse(&text, &mpath.display().to_string())?;
         let outputs = image_outputs(manifest.shader_kind()?);
-        let ds = Dataset { dir, manifest, outputs, cache: Mutex::new(Vec::new()) };
+        let ds = Dataset {
+            dir,
+            manifest,
+            outputs,
+            cache: Mutex::new(Vec::new()),
+        };
         for split in [Split::Train, Split::Test] {
             for k in 0..ds.info(split).shards.len() {
                 ds.check_header(split, k)?;
@@ -175,7 +183,11 @@ impl Dataset {
             (LIGHTS.to_string(), Dtype::F32, vec![n, 5]),
             (SHAPE_IDS.to_string(), Dtype::F32, vec![n]),
         ];
-        v.extend(self.outputs.iter().map(|&(name, _, c)| (name.to_string(), Dtype::U8, vec![n, c, s, s])));
+        v.extend(
+            self.outputs
+                .iter()
+                .map(|&(name, _, c)| (name.to_string(), Dtype::U8, vec![n, c, s, s])),
+        );
         v
     }
 
@@ -187,44 +199,70 @@ impl Dataset {
     fn check_header(&self, split: Split, k: usize) -> Result<()> {
         let path = self.shard_path(split, k);
         let name = path.display().to_string();
-        let io = |e| Error::Io { path: name.clone(), source: e };
+        let io = |e| Error::Io {
+            path: name.clone(),
+            source: e,
+        };
         let bad = |msg: String| Error::Invalid(format!("{name}: {msg}"));
         let mut f = std::fs::File::open(&path).map_err(io)?;
         let file_len = f.metadata().map_err(io)?.len();
         let mut len8 = [0u8; 8];
-        f.read_exact(&mut len8).map_err(|_| bad("truncated: no safetensors header".into()))?;
+        f.read_exact(&mut len8)
+            .map_err(|_| bad("truncated: no safetensors header".into()))?;
         let hlen = u64::from_le_bytes(len8);
         if hlen > MAX_HEADER || 8 + hlen > file_len {
-            return Err(bad(format!("safetensors header length {hlen} is absurd for a {file_len}-byte file")));
+            return Err(bad(format!(
+                "safetensors header length {hlen} is absurd for a {file_len}-byte file"
+            )));
         }
         let mut header = vec![0u8; hlen as usize];
         f.read_exact(&mut header).map_err(io)?;
-        let json: serde_json::Value =
-            serde_json::from_slice(&header).map_err(|e| bad(format!("safetensors header is not JSON: {e}")))?;
-        let obj = json.as_object().ok_or_else(|| bad("safetensors header is not a JSON object".into()))?;
+        let json: serde_json::Value = serde_json::from_slice(&header)
+            .map_err(|e| bad(format!("safetensors header is not JSON: {e}")))?;
+        let obj = json
+            .as_object()
+            .ok_or_else(|| bad("safetensors header is not a JSON object".into()))?;
         let mut data_end = 0u64;
         let expected = self.expected(split, k);
         for (tname, dtype, shape) in &expected {
-            let t = obj.get(tname).ok_or_else(|| bad(format!("tensor `{tname}` is missing")))?;
+            let t = obj
+                .get(tname)
+                .ok_or_else(|| bad(format!("tensor `{tname}` is missing")))?;
             let got_dtype = t.get("dtype").and_then(|d| d.as_str()).unwrap_or("?");
             if got_dtype != format!("{dtype:?}") {
-                return Err(bad(format!("tensor `{tname}` has dtype {got_dtype}, expected {dtype:?}")));
+                return Err(bad(format!(
+                    "tensor `{tname}` has dtype {got_dtype}, expected {dtype:?}"
+                )));
             }
-            let got_shape: Option<Vec<usize>> = t
-                .get("shape")
-                .and_then(|s| s.as_array())
-                .map(|a| a.iter().filter_map(|x| x.as_u64().map(|x| x as usize)).collect());
+            let got_shape: Option<Vec<usize>> =
+                t.get("shape").and_then(|s| s.as_array()).map(|a| {
+                    a.iter()
+                        .filter_map(|x| x.as_u64().map(|x| x as usize))
+                        .collect()
+                });
             if got_shape.as_ref() != Some(shape) {
-                return Err(bad(format!("tensor `{tname}` has shape {got_shape:?}, expected {shape:?}")));
+                return Err(bad(format!(
+                    "tensor `{tname}` has shape {got_shape:?}, expected {shape:?}"
+                )));
             }
-            let end = t.get("data_offsets").and_then(|o| o.get(1)).and_then(|e| e.as_u64()).unwrap_or(u64::MAX);
+            let end = t
+                .get("data_offsets")
+                .and_then(|o| o.get(1))
+                .and_then(|e| e.as_u64())
+                .unwrap_or(u64::MAX);
             data_end = data_end.max(end);
         }
-        if let Some(extra) = obj.keys().find(|k| *k != "__metadata__" && !expected.iter().any(|(n, _, _)| n == *k)) {
+        if let Some(extra) = obj
+            .keys()
+            .find(|k| *k != "__metadata__" && !expected.iter().any(|(n, _, _)| n == *k))
+        {
             return Err(bad(format!("unexpected tensor `{extra}`")));
         }
         if 8 + hlen + data_end != file_len {
-            return Err(bad(format!("file is {file_len} bytes but its header describes {}", 8 + hlen.saturating_add(data_end))));
+            return Err(bad(format!(
+                "file is {file_len} bytes but its header describes {}",
+                8 + hlen.saturating_add(data_end)
+            )));
         }
         Ok(())
     }
@@ -247,20 +285,46 @@ impl Dataset {
     fn load_shard(&self, split: Split, k: usize) -> Result<Shard> {
         let path = self.shard_path(split, k);
         let name = path.display().to_string();
-        let bytes = std::fs::read(&path).map_err(|e| Error::Io { path: name.clone(), source: e })?;
-        let st = SafeTensors::deserialize(&bytes).map_err(|e| Error::Invalid(format!("{name}: not a valid safetensors file: {e}")))?;
+        let bytes = std::fs::read(&path).map_err(|e| Error::Io {
+            path: name.clone(),
+            source: e,
+        })?;
+        let st = SafeTensors::deserialize(&bytes)
+            .map_err(|e| Error::Invalid(format!("{name}: not a valid safetensors file: {e}")))?;
         let mut tensors = BTreeMap::new();
         for (tname, dtype, shape) in self.expected(split, k) {
-            let t = st.tensor(&tname).map_err(|e| Error::Invalid(format!("{name}: tensor `{tname}`: {e}")))?;
+            let t = st
+                .tensor(&tname)
+                .map_err(|e| Error::Invalid(format!("{name}: tensor `{tname}`: {e}")))?;
             if t.dtype() != dtype || t.shape() != shape.as_slice() {
-                return Err(Error::Invalid(format!("{name}: tensor `{tname}` is {:?} {:?}, expected {dtype:?} {shape:?}", t.dtype(), t.shape())));
+                return Err(Error::Invalid(format!(
+                    "{name}: tensor `{tname}` is {:?} {:?}, expected {dtype:?} {shape:?}",
+                    t.dtype(),
+                    t.shape()
+                )));
             }
             tensors.insert(tname, t.data().to_vec());
         }
-        let f32s = |b: Vec<u8>| b.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect::<Vec<f32>>();
+        let f32s = |b: Vec<u8>| {
+            b.chunks_exact(4)
+                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect::<Vec<f32>>()
+        };
         let mut take = |n: &str| tensors.remove(n).unwrap_or_default();
-        let (grids, views, lights, shape_ids) = (take(GRIDS), f32s(take(VIEWS)), f32s(take(LIGHTS)), f32s(take(SHAPE_IDS)));
-        Ok(Shard { len: shape_ids.len(), grids, views, lights, shape_ids, images: tensors })
+        let (grids, views, lights, shape_ids) = (
+            take(GRIDS),
+            f32s(take(VIEWS)),
+            f32s(take(LIGHTS)),
+            f32s(take(SHAPE_IDS)),
+        );
+        Ok(Shard {
+            len: shape_ids.len(),
+            grids,
+            views,
+            lights,
+            shape_ids,
+            images: tensors,
+        })
     }
 }
 
@@ -279,7 +343,12 @@ impl SplitView<'_> {
     pub fn get(&self, i: usize) -> Result<Sample> {
         let ds = self.ds;
         if i >= self.len() {
-            return Err(Error::Invalid(format!("{}: {} sample {i} out of range (0..{})", ds.dir.display(), self.split.name(), self.len())));
+            return Err(Error::Invalid(format!(
+                "{}: {} sample {i} out of range (0..{})",
+                ds.dir.display(),
+                self.split.name(),
+                self.len()
+            )));
         }
         let shard = ds.shard(self.split, i / SHARD_SIZE)?;
         let j = i % SHARD_SIZE;
@@ -291,7 +360,11 @@ impl SplitView<'_> {
             .map_err(|e| Error::Invalid(e.to_string()))?;
         let v = &shard.views[j * 3..j * 3 + 3];
         let l = &shard.lights[j * 5..j * 5 + 5];
-        let view = View { azimuth: v[0] as f64, elevation: v[1] as f64, radius: v[2] as f64 };
+        let view = View {
+            azimuth: v[0] as f64,
+            elevation: v[1] as f64,
+            radius: v[2] as f64,
+        };
         let light = Light {
             azimuth: l[0] as f64,
             elevation: l[1] as f64,
@@ -307,9 +380,22 @@ impl SplitView<'_> {
             .iter()
             .map(|&(name, _, c)| {
                 let data = unpack(&shard.images[name][j * c * s2..(j + 1) * c * s2]);
-                (name.to_string(), Image { channels: c, size: m.image, data })
+                (
+                    name.to_string(),
+                    Image {
+                        channels: c,
+                        size: m.image,
+                        data,
+                    },
+                )
             })
             .collect();
-        Ok(Sample { grid, view, light, shape_id: shard.shape_ids[j] as u32, images })
+        Ok(Sample {
+            grid,
+            view,
+            light,
+            shape_id: shard.shape_ids[j] as u32,
+            images,
+        })
     }
 }
