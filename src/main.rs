@@ -21,7 +21,7 @@ enum Cmd {
     /// Render one ground-truth image with the reference renderer (the images RenderNet learns
     /// to imitate): a voxel file, a mesh (voxelised), or a procedural shape, seen from an
     /// orthographic camera at the given pose and shaded by --shader. With neither --voxels
-    /// nor --shape it renders the built-in default, procedural chair seed 0 at 64^3.
+    /// nor --shape it renders the built-in default, the Stanford bunny at 64^3.
     Truth(cli::truth::TruthArgs),
     /// Generate a deterministic, sharded training/test set (input grids, poses, lights and
     /// reference-rendered targets) with a manifest; see datasets/README.md.

@@ -99,15 +99,21 @@ fn voxel_err(e: voxel::VoxelError) -> Error {
     Error::Invalid(e.to_string())
 }
 
+/// `datasets/fixtures/bunny64.binvox`, the default scene of `truth` and `render`.
+pub const BUNNY: &[u8] = include_bytes!("../../datasets/fixtures/bunny64.binvox");
+
 /// Loads the grid the flags name, and says what it is.
 pub fn load(a: &SceneArgs) -> Result<(VoxelGrid, String)> {
     let Some(path) = &a.voxels else {
-        // No file: a procedural shape; the embedded default is chair seed 0 at 64^3 until a
-        // committed real-mesh fixture (the bunny) replaces it.
-        let family = a.shape.unwrap_or(Family::Chair);
-        let grid = family.generate(a.seed).to_grid(a.resolution).map_err(voxel_err)?;
-        let what = format!("procedural {family:?} seed {} at {}^3", a.seed, a.resolution).to_lowercase();
-        return Ok((grid, what));
+        if let Some(family) = a.shape {
+            let grid = family.generate(a.seed).to_grid(a.resolution).map_err(voxel_err)?;
+            let what = format!("procedural {family:?} seed {} at {}^3", a.seed, a.resolution).to_lowercase();
+            return Ok((grid, what));
+        }
+        // The embedded default: the Stanford bunny (public domain, npm `bunny`) voxelised at
+        // 64^3, a shape no training set of ours contains.
+        let grid = Binvox::parse(BUNNY, "embedded bunny64.binvox").map_err(voxel_err)?.grid;
+        return Ok((grid, "the embedded Stanford bunny at 64^3".into()));
     };
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let grid = match ext.as_str() {
