@@ -245,7 +245,7 @@ fn truth_cli_writes_a_png() {
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "stderr: {}", String::from_utf8_lossy(&out.stderr));
-    assert!(stdout.contains("rendered procedural chair seed 0"), "{stdout}");
+    assert!(stdout.contains("rendered the embedded Stanford bunny"), "{stdout}");
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
     let bad = std::process::Command::new(env!("CARGO_BIN_EXE_rendernet"))
