@@ -23,6 +23,10 @@ enum Cmd {
     /// orthographic camera at the given pose and shaded by --shader. With neither --voxels
     /// nor --shape it renders the built-in default, procedural chair seed 0 at 64^3.
     Truth(cli::truth::TruthArgs),
+    /// Time the conv, transposed-conv and projection kernels (reference and tiled) on shapes
+    /// from the RenderNet presets: median ms and GFLOP/s per pass, GPU timestamps when the
+    /// adapter has them.
+    Bench(cli::bench::BenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -35,6 +39,7 @@ fn main() -> ExitCode {
     let r = match cli.cmd {
         Cmd::Info => cli::info::run(),
         Cmd::Truth(a) => cli::truth::run(a),
+        Cmd::Bench(a) => cli::bench::run(a),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,4 +1,5 @@
 //! Subcommand implementations: parse, call the library, report.
 
+pub mod bench;
 pub mod info;
 pub mod truth;

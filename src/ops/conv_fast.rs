@@ -1,0 +1,178 @@
+//! The tiled conv kernels of `shaders/conv_fast.wgsl` (see its header for the tiling and why
+//! it suits lavapipe), behind `conv::dispatch_*`. Each call repacks its operands into
+//! channels-last scratch tensors first (a memory-bound pass, a few percent of the FLOPs'
+//! time), so callers keep PyTorch layouts.
+
+use super::conv::Geometry;
+use crate::error::Result;
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
+
+const SHADER: Shader = Shader { name: "conv_fast", source: include_str!("../../shaders/conv_fast.wgsl") };
+
+/// Mirrors `Params` in `shaders/conv_fast.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    n: u32,
+    ci: u32,
+    co: u32,
+    id: u32,
+    ih: u32,
+    iw: u32,
+    od: u32,
+    oh: u32,
+    ow: u32,
+    kd: u32,
+    kh: u32,
+    kw: u32,
+    sd: u32,
+    sh: u32,
+    sw: u32,
+    pd: u32,
+    ph: u32,
+    pw: u32,
+    cpad: u32,
+    co16: u32,
+    flip: u32,
+    has_bias: u32,
+    nchunks: u32,
+    chunk: u32,
+    total: u32,
+}
+
+fn params(g: &Geometry, cpad: usize) -> Params {
+    let u = |v: usize| v as u32;
+    let [id, ih, iw] = g.input.map(u);
+    let [od, oh, ow] = g.output.map(u);
+    let [kd, kh, kw] = g.kernel.map(u);
+    let [sd, sh, sw] = g.stride.map(u);
+    let [pd, ph, pw] = g.pad.map(u);
+    Params {
+        n: u(g.n),
+        ci: u(g.ci),
+        co: u(g.co),
+        id, ih, iw, od, oh, ow, kd, kh, kw, sd, sh, sw, pd, ph, pw,
+        cpad: u(cpad),
+        co16: u(g.co.div_ceil(16)),
+        ..Default::default()
+    }
+}
+
+fn dispatch(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, entry: &'static str, mut p: Params, args: &[Arg], total: usize) -> Result<()> {
+    p.total = total as u32;
+    gpu.dispatch(pass, SHADER, entry, &p, args, grid_1d(total as u64, 64)?)
+}
+
+/// `t` ([N, C, spatial...] with `c` channels over `s` positions) repacked channels-last as
+/// [N, s, cpad], channels past `c` zero.
+fn pack_input(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, t: &Tensor, n: usize, c: usize, s: usize, cpad: usize) -> Result<Tensor> {
+    let out = Tensor::zeros(gpu, &[n, s, cpad])?;
+    let p = Params { n: n as u32, ci: c as u32, id: 1, ih: 1, iw: s as u32, cpad: cpad as u32, ..Default::default() };
+    dispatch(gpu, pass, "conv_fast_pack_input", p, &[Arg::R(t), Arg::W(&out)], n * s * cpad)?;
+    Ok(out)
+}
+
+/// Weights repacked as [tap][cpad][co16 * 16] for the dispatch geometry `g`; `flip` reads a
+/// forward conv's weights as those of its stride-1 backward-input conv.
+fn pack_weights(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, w: &Tensor, cpad: usize, flip: bool) -> Result<Tensor> {
+    let taps: usize = g.kernel.iter().product();
+    let copad = g.co.div_ceil(16) * 16;
+    let out = Tensor::zeros(gpu, &[taps, cpad, copad])?;
+    let p = Params { flip: flip as u32, ..params(g, cpad) };
+    dispatch(gpu, pass, "conv_fast_pack_weights", p, &[Arg::R(w), Arg::W(&out)], out.numel())?;
+    Ok(out)
+}
+
+fn volume(s: [usize; 3]) -> usize {
+    s.iter().product()
+}
+
+/// The tiled forward of dispatch geometry `g`: packs `x` and `w` (`flip` as in
+/// [`pack_weights`]), then one invocation per 8 outputs along W x 16 output channels.
+fn forward_packed(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    x: &Tensor,
+    w: &Tensor,
+    flip: bool,
+    b: Option<&Tensor>,
+    y: &Tensor,
+) -> Result<()> {
+    let cpad = g.ci.div_ceil(4) * 4;
+    let xp = pack_input(gpu, pass, x, g.n, g.ci, volume(g.input), cpad)?;
+    let wp = pack_weights(gpu, pass, g, w, cpad, flip)?;
+    let [od, oh, ow] = g.output;
+    let tiles = g.n * g.co.div_ceil(16) * od * oh * ow.div_ceil(8);
+    let p = Params { has_bias: b.is_some() as u32, ..params(g, cpad) };
+    let bias = b.map_or(Arg::Absent, Arg::R);
+    dispatch(gpu, pass, "conv_fast_forward", p, &[Arg::R(&xp), Arg::R(&wp), bias, Arg::W(y)], tiles)
+}
+
+/// Tiled `y = conv(x, w) + b` (any stride and padding).
+pub(crate) fn forward(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    x: &Tensor,
+    w: &Tensor,
+    b: Option<&Tensor>,
+    y: &Tensor,
+) -> Result<()> {
+    forward_packed(gpu, pass, g, x, w, false, b, y)
+}
+
+/// Whether [`backward_input`] handles `g`: stride 1 on every axis, and padding before of at
+/// most `k - 1` (so the flipped conv's padding `k - 1 - pad` is not negative).
+pub(crate) fn supports_backward_input(g: &Geometry) -> bool {
+    (0..3).all(|a| g.stride[a] == 1 && g.pad[a] < g.kernel[a])
+}
+
+/// Tiled `dx = conv^T(dy, w) (+ b)` for a stride-1 `g`: the forward conv of `dy` with the
+/// kernel flipped and its channel axes swapped, padded `k - 1 - pad` before.
+pub(crate) fn backward_input(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    dy: &Tensor,
+    w: &Tensor,
+    b: Option<&Tensor>,
+    dx: &Tensor,
+) -> Result<()> {
+    let t = Geometry {
+        ci: g.co,
+        co: g.ci,
+        input: g.output,
+        output: g.input,
+        pad: [0, 1, 2].map(|a| g.kernel[a] - 1 - g.pad[a]),
+        ..*g
+    };
+    forward_packed(gpu, pass, &t, dy, w, true, b, dx)
+}
+
+/// Tiled `dw[co, ci, k] = Σ dy[n, co, o] x[n, ci, o*s - pad + k]`: per-chunk partial sums,
+/// then a fixed-order sum over chunks (deterministic, no atomics).
+pub(crate) fn backward_weight(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    x: &Tensor,
+    dy: &Tensor,
+    dw: &Tensor,
+) -> Result<()> {
+    let (cpad, copad) = (g.ci.div_ceil(8) * 8, g.co.div_ceil(16) * 16);
+    let positions = g.n * volume(g.output);
+    let xp = pack_input(gpu, pass, x, g.n, g.ci, volume(g.input), cpad)?;
+    let dyp = pack_input(gpu, pass, dy, g.n, g.co, volume(g.output), copad)?;
+    let taps = volume(g.kernel);
+    let columns = taps * (cpad / 8) * (copad / 16);
+    // Enough chunks for ~1024 invocations (lavapipe spreads workgroups over its threads),
+    // but at least 64 positions per chunk so the partial sums stay small next to the work.
+    let nchunks = 1024usize.div_ceil(columns).clamp(1, positions.div_ceil(64).max(1));
+    let chunk = positions.div_ceil(nchunks);
+    let nchunks = positions.div_ceil(chunk);
+    let part = Tensor::zeros(gpu, &[nchunks, taps, cpad, copad])?;
+    let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, ..params(g, cpad) };
+    dispatch(gpu, pass, "conv_fast_backward_weight", p, &[Arg::R(&xp), Arg::R(&dyp), Arg::W(&part)], nchunks * columns)?;
+    dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
+}
