@@ -33,7 +33,7 @@ struct Params {
     // Weight packing: 1 to flip the kernel and swap channel axes (backward input).
     flip: u32,
     has_bias: u32,
-    // Backward weight: number of position chunks and positions per chunk.
+    // Backward weight: number of chunks of output rows (n, od, oh) and rows per chunk.
     nchunks: u32, chunk: u32,
     // Invocations that do work.
     total: u32,
@@ -239,12 +239,21 @@ fn conv_fast_backward_weight(@builtin(global_invocation_id) gid: vec3<u32>, @bui
     let kw = tap % p.kw;
     let kh = (tap / p.kw) % p.kh;
     let kd = tap / (p.kw * p.kh);
-    let s_out = p.od * p.oh * p.ow;
-    let total_pos = p.n * s_out;
+    // Chunks are runs of output rows (n, od, oh); within a row the taps that land inside the
+    // input are a contiguous range of ow, found once per row, so the inner loop only steps
+    // two indices and carries no bounds checks.
+    let rows = p.n * p.od * p.oh;
     let begin = chunk * p.chunk;
-    let end = min(begin + p.chunk, total_pos);
+    let end = min(begin + p.chunk, rows);
     let cq = p.cpad / 4u;
     let co4 = p.co16 * 4u;
+    // ow range with 0 <= ow*sw + kw - pw < iw (the same for every row).
+    let lo_num = i32(p.pw) - i32(kw);
+    var ow_lo = 0u;
+    if (lo_num > 0) { ow_lo = (u32(lo_num) + p.sw - 1u) / p.sw; }
+    let hi_num = i32(p.iw) + i32(p.pw) - i32(kw);   // ow*sw < hi_num
+    var ow_hi = 0u;
+    if (hi_num > 0) { ow_hi = min((u32(hi_num) + p.sw - 1u) / p.sw, p.ow); }
     var e00 = vec4<f32>(0.0); var e01 = vec4<f32>(0.0); var e02 = vec4<f32>(0.0); var e03 = vec4<f32>(0.0);
     var e10 = vec4<f32>(0.0); var e11 = vec4<f32>(0.0); var e12 = vec4<f32>(0.0); var e13 = vec4<f32>(0.0);
     var e20 = vec4<f32>(0.0); var e21 = vec4<f32>(0.0); var e22 = vec4<f32>(0.0); var e23 = vec4<f32>(0.0);
@@ -253,22 +262,20 @@ fn conv_fast_backward_weight(@builtin(global_invocation_id) gid: vec3<u32>, @bui
     var e50 = vec4<f32>(0.0); var e51 = vec4<f32>(0.0); var e52 = vec4<f32>(0.0); var e53 = vec4<f32>(0.0);
     var e60 = vec4<f32>(0.0); var e61 = vec4<f32>(0.0); var e62 = vec4<f32>(0.0); var e63 = vec4<f32>(0.0);
     var e70 = vec4<f32>(0.0); var e71 = vec4<f32>(0.0); var e72 = vec4<f32>(0.0); var e73 = vec4<f32>(0.0);
-    // Walk positions with counters rather than dividing per position (integer division is
-    // scalarised per lane on llvmpipe).
-    var ow = begin % p.ow;
-    var oh = (begin / p.ow) % p.oh;
-    var od = (begin / (p.ow * p.oh)) % p.od;
-    var n = begin / s_out;
-    for (var i = begin; i < end; i++) {
+    for (var row = begin; row < end; row++) {
+        let oh = row % p.oh;
+        let od = (row / p.oh) % p.od;
+        let n = row / (p.oh * p.od);
         let zd = i32(od * p.sd + kd) - i32(p.pd);
         let zh = i32(oh * p.sh + kh) - i32(p.ph);
-        let zw = i32(ow * p.sw + kw) - i32(p.pw);
-        let inside = zd >= 0 && zd < i32(p.id) && zh >= 0 && zh < i32(p.ih) && zw >= 0 && zw < i32(p.iw);
-        if (inside) {
-            let xi = (((n * p.id + u32(zd)) * p.ih + u32(zh)) * p.iw + u32(zw)) * cq + 2u * g8;
+        if (zd < 0 || zd >= i32(p.id) || zh < 0 || zh >= i32(p.ih) || ow_lo >= ow_hi) { continue; }
+        let zw = ow_lo * p.sw + kw - p.pw;
+        var xi = (((n * p.id + u32(zd)) * p.ih + u32(zh)) * p.iw + zw) * cq + 2u * g8;
+        var gi = (row * p.ow + ow_lo) * co4 + cg * 4u;
+        let xstep = p.sw * cq;
+        for (var ow = ow_lo; ow < ow_hi; ow++) {
             let xa = gx[xi];
             let xb = gx[xi + 1u];
-            let gi = i * co4 + cg * 4u;
             let g0 = gdy[gi]; let g1 = gdy[gi + 1u]; let g2 = gdy[gi + 2u]; let g3 = gdy[gi + 3u];
             e00 += xa.x * g0; e01 += xa.x * g1; e02 += xa.x * g2; e03 += xa.x * g3;
             e10 += xa.y * g0; e11 += xa.y * g1; e12 += xa.y * g2; e13 += xa.y * g3;
@@ -278,14 +285,8 @@ fn conv_fast_backward_weight(@builtin(global_invocation_id) gid: vec3<u32>, @bui
             e50 += xb.y * g0; e51 += xb.y * g1; e52 += xb.y * g2; e53 += xb.y * g3;
             e60 += xb.z * g0; e61 += xb.z * g1; e62 += xb.z * g2; e63 += xb.z * g3;
             e70 += xb.w * g0; e71 += xb.w * g1; e72 += xb.w * g2; e73 += xb.w * g3;
-        }
-        ow += 1u;
-        if (ow == p.ow) {
-            ow = 0u; oh += 1u;
-            if (oh == p.oh) {
-                oh = 0u; od += 1u;
-                if (od == p.od) { od = 0u; n += 1u; }
-            }
+            xi += xstep;
+            gi += co4;
         }
     }
     // part[chunk][tap][ci][co quad]: row of co4 vec4s per input channel.

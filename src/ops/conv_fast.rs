@@ -150,8 +150,8 @@ pub(crate) fn backward_input(
     forward_packed(gpu, pass, &t, dy, w, true, b, dx)
 }
 
-/// Tiled `dw[co, ci, k] = Σ dy[n, co, o] x[n, ci, o*s - pad + k]`: per-chunk partial sums,
-/// then a fixed-order sum over chunks (deterministic, no atomics).
+/// Tiled `dw[co, ci, k] = Σ dy[n, co, o] x[n, ci, o*s - pad + k]`: partial sums per chunk of
+/// output rows, then a fixed-order sum over chunks (deterministic, no atomics).
 pub(crate) fn backward_weight(
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
@@ -161,16 +161,16 @@ pub(crate) fn backward_weight(
     dw: &Tensor,
 ) -> Result<()> {
     let (cpad, copad) = (g.ci.div_ceil(8) * 8, g.co.div_ceil(16) * 16);
-    let positions = g.n * volume(g.output);
     let xp = pack_input(gpu, pass, x, g.n, g.ci, volume(g.input), cpad)?;
     let dyp = pack_input(gpu, pass, dy, g.n, g.co, volume(g.output), copad)?;
     let taps = volume(g.kernel);
     let columns = taps * (cpad / 8) * (copad / 16);
-    // Enough chunks for ~1024 invocations (lavapipe spreads workgroups over its threads),
-    // but at least 64 positions per chunk so the partial sums stay small next to the work.
-    let nchunks = 1024usize.div_ceil(columns).clamp(1, positions.div_ceil(64).max(1));
-    let chunk = positions.div_ceil(nchunks);
-    let nchunks = positions.div_ceil(chunk);
+    // Chunks of output rows (n, od, oh): enough for ~1024 invocations (lavapipe spreads
+    // workgroups over its threads), never more than there are rows.
+    let rows = g.n * g.output[0] * g.output[1];
+    let nchunks = 1024usize.div_ceil(columns).clamp(1, rows);
+    let chunk = rows.div_ceil(nchunks);
+    let nchunks = rows.div_ceil(chunk);
     let part = Tensor::zeros(gpu, &[nchunks, taps, cpad, copad])?;
     let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, ..params(g, cpad) };
     dispatch(gpu, pass, "conv_fast_backward_weight", p, &[Arg::R(&xp), Arg::R(&dyp), Arg::W(&part)], nchunks * columns)?;
