@@ -100,7 +100,7 @@ fn transposed_cases(gpu: &Gpu, shape: &str, t: ConvTranspose, xs: &[usize], ws: 
     Ok(out)
 }
 
-fn projection_cases(gpu: &Gpu) -> Result<Vec<Case>> {
+fn projection_cases(gpu: &Gpu, choice: &str) -> Result<Vec<Case>> {
     let (n, k, o, h, w) = (1, 512, 256, 64, 64);
     let x = Tensor::zeros(gpu, &[n, k, h, w])?;
     let wt = Tensor::zeros(gpu, &[o, k, 1, 1])?;
@@ -109,13 +109,15 @@ fn projection_cases(gpu: &Gpu) -> Result<Vec<Case>> {
     let shape = format!("{k}->{o} 1x1 on {h}x{w}, batch {n}");
     let mut out = Vec::new();
     for pass in PASSES {
-        let (x, wt, b, y) = (x.clone(), wt.clone(), b.clone(), y.clone());
-        let record: Box<dyn FnMut(&Gpu, &mut wgpu::ComputePass<'_>) -> Result<()>> = match pass {
-            Pass::Forward => Box::new(move |g, p| projection::forward(g, p, &x, &wt, &b, &y)),
-            Pass::BackwardInput => Box::new(move |g, p| projection::backward_input(g, p, &y, &wt, &x)),
-            Pass::BackwardWeight => Box::new(move |g, p| projection::backward_weight(g, p, &x, &y, &wt)),
-        };
-        out.push(Case { op: "projection", shape: shape.clone(), pass, kernel: "reference", flops, record });
+        for (name, kern) in kernels(choice) {
+            let (x, wt, b, y) = (x.clone(), wt.clone(), b.clone(), y.clone());
+            let record: Box<dyn FnMut(&Gpu, &mut wgpu::ComputePass<'_>) -> Result<()>> = match pass {
+                Pass::Forward => Box::new(move |g, p| projection::forward_with(kern, g, p, &x, &wt, &b, &y)),
+                Pass::BackwardInput => Box::new(move |g, p| projection::backward_input_with(kern, g, p, &y, &wt, &x)),
+                Pass::BackwardWeight => Box::new(move |g, p| projection::backward_weight_with(kern, g, p, &x, &y, &wt)),
+            };
+            out.push(Case { op: "projection", shape: shape.clone(), pass, kernel: name, flops, record });
+        }
     }
     Ok(out)
 }
@@ -129,7 +131,7 @@ fn cases(gpu: &Gpu, choice: &str) -> Result<Vec<Case>> {
     v.extend(conv_cases(gpu, "conv2d", "256->256 3x3 on 32x32, batch 1", c2, &[1, 256, 32, 32], &[256, 256, 3, 3], choice)?);
     let t = ConvTranspose::conv2d([4, 4], [2, 2], Padding::Same);
     v.extend(transposed_cases(gpu, "64->32 4x4 s2 on 64x64, batch 1", t, &[1, 64, 64, 64], &[64, 32, 4, 4], choice)?);
-    v.extend(projection_cases(gpu)?);
+    v.extend(projection_cases(gpu, choice)?);
     Ok(v)
 }
 
