@@ -18,7 +18,9 @@
 // over (id, ih, iw) and writes `co` channels over (od, oh, ow); input position of tap k at
 // output o is o*stride - pad + k. A conv's backward-input pass at stride 1 is this same
 // forward conv on dy with the kernel flipped and its channel axes swapped (flip = 1 in the
-// weight packing), with pad' = k - 1 - pad.
+// weight packing), with pad' = k - 1 - pad; at stride s > 1 it is that conv on dy dilated by
+// s (zeros between the values), which wastes the multiplications by those zeros (s^2 of
+// them in 2D) but keeps one kernel: a per-phase kernel would avoid them.
 
 struct Params {
     n: u32, ci: u32, co: u32,
@@ -44,8 +46,11 @@ fn lin(gid: vec3<u32>, nwg: vec3<u32>) -> u32 {
     return gid.x + gid.y * nwg.x * 64u;
 }
 
-// ---- packing: [N, C, S] -> [N, S, cpad] channels-last, zero channels past C ----------------
-// Params: n, ci = C, id*ih*iw = S, cpad.
+// ---- packing: [N, C, id, ih, iw] -> [N, od, oh, ow, cpad] channels-last ------------------
+// Channels past C are zero. With strides (sd, sh, sw) > 1 the source is also dilated: source
+// voxel v lands at v * stride and the voxels between are zero (a strided conv's backward
+// input is a stride-1 conv of its dilated dy). Params: n, ci = C, id/ih/iw source size,
+// od/oh/ow destination size, sd/sh/sw, cpad.
 @group(0) @binding(1) var<storage, read> src: array<f32>;
 @group(0) @binding(2) var<storage, read_write> dst: array<f32>;
 
@@ -53,13 +58,17 @@ fn lin(gid: vec3<u32>, nwg: vec3<u32>) -> u32 {
 fn conv_fast_pack_input(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = lin(gid, nwg);
     if (i >= p.total) { return; }
-    let s_len = p.id * p.ih * p.iw;
-    let c = i % p.cpad;
-    let r = i / p.cpad;
-    let s = r % s_len;
-    let n = r / s_len;
+    var r = i;
+    let c = r % p.cpad; r /= p.cpad;
+    let w = r % p.ow; r /= p.ow;
+    let h = r % p.oh; r /= p.oh;
+    let d = r % p.od;
+    let n = r / p.od;
     var v = 0.0;
-    if (c < p.ci) { v = src[(n * p.ci + c) * s_len + s]; }
+    let on_grid = w % p.sw == 0u && h % p.sh == 0u && d % p.sd == 0u;
+    if (c < p.ci && on_grid && d / p.sd < p.id && h / p.sh < p.ih && w / p.sw < p.iw) {
+        v = src[(((n * p.ci + c) * p.id + d / p.sd) * p.ih + h / p.sh) * p.iw + w / p.sw];
+    }
     dst[i] = v;
 }
 

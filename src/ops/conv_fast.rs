@@ -63,12 +63,25 @@ fn dispatch(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, entry: &'static str, mu
     gpu.dispatch(pass, SHADER, entry, &p, args, grid_1d(total as u64, 64)?)
 }
 
-/// `t` ([N, C, spatial...] with `c` channels over `s` positions) repacked channels-last as
-/// [N, s, cpad], channels past `c` zero.
-fn pack_input(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, t: &Tensor, n: usize, c: usize, s: usize, cpad: usize) -> Result<Tensor> {
-    let out = Tensor::zeros(gpu, &[n, s, cpad])?;
-    let p = Params { n: n as u32, ci: c as u32, id: 1, ih: 1, iw: s as u32, cpad: cpad as u32, ..Default::default() };
-    dispatch(gpu, pass, "conv_fast_pack_input", p, &[Arg::R(t), Arg::W(&out)], n * s * cpad)?;
+/// `t` ([N, c, src...]) repacked channels-last as [N, dst..., cpad], channels past `c` zero;
+/// voxel v goes to v * stride (zeros between when the stride exceeds 1, see the shader).
+#[allow(clippy::too_many_arguments)]
+fn pack_input(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    t: &Tensor,
+    n: usize,
+    c: usize,
+    src: [usize; 3],
+    dst: [usize; 3],
+    stride: [usize; 3],
+    cpad: usize,
+) -> Result<Tensor> {
+    let out = Tensor::zeros(gpu, &[n, volume(dst), cpad])?;
+    let u = |a: [usize; 3]| a.map(|v| v as u32);
+    let ([id, ih, iw], [od, oh, ow], [sd, sh, sw]) = (u(src), u(dst), u(stride));
+    let p = Params { n: n as u32, ci: c as u32, id, ih, iw, od, oh, ow, sd, sh, sw, cpad: cpad as u32, ..Default::default() };
+    dispatch(gpu, pass, "conv_fast_pack_input", p, &[Arg::R(t), Arg::W(&out)], out.numel())?;
     Ok(out)
 }
 
@@ -87,20 +100,24 @@ fn volume(s: [usize; 3]) -> usize {
     s.iter().product()
 }
 
-/// The tiled forward of dispatch geometry `g`: packs `x` and `w` (`flip` as in
-/// [`pack_weights`]), then one invocation per 8 outputs along W x 16 output channels.
+/// The tiled forward of dispatch geometry `g`: packs `x` (of spatial size `src`, dilated by
+/// `dilate` into `g.input`) and `w` (`flip` as in [`pack_weights`]), then one invocation per
+/// 8 outputs along W x 16 output channels.
+#[allow(clippy::too_many_arguments)]
 fn forward_packed(
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
     g: &Geometry,
     x: &Tensor,
+    src: [usize; 3],
+    dilate: [usize; 3],
     w: &Tensor,
     flip: bool,
     b: Option<&Tensor>,
     y: &Tensor,
 ) -> Result<()> {
     let cpad = g.ci.div_ceil(4) * 4;
-    let xp = pack_input(gpu, pass, x, g.n, g.ci, volume(g.input), cpad)?;
+    let xp = pack_input(gpu, pass, x, g.n, g.ci, src, g.input, dilate, cpad)?;
     let wp = pack_weights(gpu, pass, g, w, cpad, flip)?;
     let [od, oh, ow] = g.output;
     let tiles = g.n * g.co.div_ceil(16) * od * oh * ow.div_ceil(8);
@@ -119,17 +136,17 @@ pub(crate) fn forward(
     b: Option<&Tensor>,
     y: &Tensor,
 ) -> Result<()> {
-    forward_packed(gpu, pass, g, x, w, false, b, y)
+    forward_packed(gpu, pass, g, x, g.input, [1; 3], w, false, b, y)
 }
 
-/// Whether [`backward_input`] handles `g`: stride 1 on every axis, and padding before of at
-/// most `k - 1` (so the flipped conv's padding `k - 1 - pad` is not negative).
+/// Whether [`backward_input`] handles `g`: padding before of at most `k - 1` on every axis
+/// (so the flipped conv's padding `k - 1 - pad` is not negative).
 pub(crate) fn supports_backward_input(g: &Geometry) -> bool {
-    (0..3).all(|a| g.stride[a] == 1 && g.pad[a] < g.kernel[a])
+    (0..3).all(|a| g.pad[a] < g.kernel[a])
 }
 
-/// Tiled `dx = conv^T(dy, w) (+ b)` for a stride-1 `g`: the forward conv of `dy` with the
-/// kernel flipped and its channel axes swapped, padded `k - 1 - pad` before.
+/// Tiled `dx = conv^T(dy, w) (+ b)`: the stride-1 forward conv of `dy` dilated by the stride,
+/// with the kernel flipped and its channel axes swapped, padded `k - 1 - pad` before.
 pub(crate) fn backward_input(
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
@@ -142,12 +159,13 @@ pub(crate) fn backward_input(
     let t = Geometry {
         ci: g.co,
         co: g.ci,
-        input: g.output,
+        input: [0, 1, 2].map(|a| (g.output[a] - 1) * g.stride[a] + 1),
         output: g.input,
+        stride: [1; 3],
         pad: [0, 1, 2].map(|a| g.kernel[a] - 1 - g.pad[a]),
         ..*g
     };
-    forward_packed(gpu, pass, &t, dy, w, true, b, dx)
+    forward_packed(gpu, pass, &t, dy, g.output, g.stride, w, true, b, dx)
 }
 
 /// Tiled `dw[co, ci, k] = Σ dy[n, co, o] x[n, ci, o*s - pad + k]`: partial sums per chunk of
@@ -161,8 +179,8 @@ pub(crate) fn backward_weight(
     dw: &Tensor,
 ) -> Result<()> {
     let (cpad, copad) = (g.ci.div_ceil(8) * 8, g.co.div_ceil(16) * 16);
-    let xp = pack_input(gpu, pass, x, g.n, g.ci, volume(g.input), cpad)?;
-    let dyp = pack_input(gpu, pass, dy, g.n, g.co, volume(g.output), copad)?;
+    let xp = pack_input(gpu, pass, x, g.n, g.ci, g.input, g.input, [1; 3], cpad)?;
+    let dyp = pack_input(gpu, pass, dy, g.n, g.co, g.output, g.output, [1; 3], copad)?;
     let taps = volume(g.kernel);
     let columns = taps * (cpad / 8) * (copad / 16);
     // Chunks of output rows (n, od, oh): enough for ~1024 invocations (lavapipe spreads
