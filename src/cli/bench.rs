@@ -25,6 +25,9 @@ pub struct BenchArgs {
     kernel: String,
 }
 
+/// Records one call of a case's kernel.
+type Recorder = Box<dyn FnMut(&Gpu, &mut wgpu::ComputePass<'_>) -> Result<()>>;
+
 /// One timed thing: a pass of an op on one shape with one kernel choice.
 struct Case {
     op: &'static str,
@@ -32,7 +35,7 @@ struct Case {
     pass: Pass,
     kernel: &'static str,
     flops: f64,
-    record: Box<dyn FnMut(&Gpu, &mut wgpu::ComputePass<'_>) -> Result<()>>,
+    record: Recorder,
 }
 
 fn pass_name(p: Pass) -> &'static str {
@@ -64,7 +67,7 @@ fn conv_cases(gpu: &Gpu, op: &'static str, shape: &str, c: Conv, xs: &[usize], w
                 continue;
             }
             let (x, w, y, b) = (x.clone(), w.clone(), y.clone(), b.clone());
-            let record: Box<dyn FnMut(&Gpu, &mut wgpu::ComputePass<'_>) -> Result<()>> = match pass {
+            let record: Recorder = match pass {
                 Pass::Forward => Box::new(move |g, p| c.forward_with(k, g, p, &x, &w, Some(&b), &y)),
                 Pass::BackwardInput => Box::new(move |g, p| c.backward_input_with(k, g, p, &y, &w, &x)),
                 Pass::BackwardWeight => Box::new(move |g, p| c.backward_weight_with(k, g, p, &x, &y, &w)),
@@ -89,7 +92,7 @@ fn transposed_cases(gpu: &Gpu, shape: &str, t: ConvTranspose, xs: &[usize], ws: 
                 continue;
             }
             let (x, w, y, b) = (x.clone(), w.clone(), y.clone(), b.clone());
-            let record: Box<dyn FnMut(&Gpu, &mut wgpu::ComputePass<'_>) -> Result<()>> = match pass {
+            let record: Recorder = match pass {
                 Pass::Forward => Box::new(move |g, p| t.forward_with(k, g, p, &x, &w, Some(&b), &y)),
                 Pass::BackwardInput => Box::new(move |g, p| t.backward_input_with(k, g, p, &y, &w, &x)),
                 Pass::BackwardWeight => Box::new(move |g, p| t.backward_weight_with(k, g, p, &x, &y, &w)),
@@ -111,7 +114,7 @@ fn projection_cases(gpu: &Gpu, choice: &str) -> Result<Vec<Case>> {
     for pass in PASSES {
         for (name, kern) in kernels(choice) {
             let (x, wt, b, y) = (x.clone(), wt.clone(), b.clone(), y.clone());
-            let record: Box<dyn FnMut(&Gpu, &mut wgpu::ComputePass<'_>) -> Result<()>> = match pass {
+            let record: Recorder = match pass {
                 Pass::Forward => Box::new(move |g, p| projection::forward_with(kern, g, p, &x, &wt, &b, &y)),
                 Pass::BackwardInput => Box::new(move |g, p| projection::backward_input_with(kern, g, p, &y, &wt, &x)),
                 Pass::BackwardWeight => Box::new(move |g, p| projection::backward_weight_with(kern, g, p, &x, &y, &wt)),
