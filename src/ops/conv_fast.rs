@@ -184,9 +184,11 @@ pub(crate) fn backward_weight(
     let taps = volume(g.kernel);
     let columns = taps * (cpad / 8) * (copad / 16);
     // Chunks of output rows (n, od, oh): enough for ~1024 invocations (lavapipe spreads
-    // workgroups over its threads), never more than there are rows.
+    // workgroups over its threads), and about 1024 positions or fewer each so the operands a
+    // workgroup streams stay in cache (2x on the 512->256 projection's weight gradient),
+    // never more chunks than there are rows.
     let rows = g.n * g.output[0] * g.output[1];
-    let nchunks = 1024usize.div_ceil(columns).clamp(1, rows);
+    let nchunks = 1024usize.div_ceil(columns).max((rows * g.output[2]).div_ceil(1024)).clamp(1, rows);
     let chunk = rows.div_ceil(nchunks);
     let nchunks = rows.div_ceil(chunk);
     let part = Tensor::zeros(gpu, &[nchunks, taps, cpad, copad])?;
