@@ -1,8 +1,9 @@
 //! 3D and 2D convolution (binds `shaders/conv.wgsl`): any kernel size, per-axis stride,
 //! asymmetric padding, optional bias. A 2D conv is the 3D kernel with depth 1 (NCHW seen as
-//! NC1HW, OIHW as OI1HW), so one shader serves both. The kernels are reference-quality
-//! (one invocation per output value, deterministic); faster kernels can slot in behind
-//! [`Conv`]'s methods without changing callers.
+//! NC1HW, OIHW as OI1HW), so one shader serves both. `conv.wgsl` holds the reference kernels
+//! (one invocation per output value, deterministic), the tests' oracle; the tiled kernels of
+//! `shaders/conv_fast.wgsl` (module `conv_fast`) run behind the same methods where
+//! [`ConvKernel::Auto`] picks them. Both are deterministic.
 
 use super::{conv_fast, expect_rank, expect_shape};
 use crate::error::{Result, shape_err};
@@ -11,7 +12,7 @@ use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
 const SHADER: Shader = Shader { name: "conv", source: include_str!("../../shaders/conv.wgsl") };
 
 /// Which kernels a conv call runs. `Auto` (what [`Conv::forward`] and friends use) picks
-/// the tiled kernels where [`select`] says they apply and pay; the others force a choice so
+/// the tiled kernels where they apply and pay (a small table by channel counts); the others force a choice so
 /// tests and `rendernet bench` can compare the two on the same call.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum ConvKernel {
