@@ -15,7 +15,7 @@ mod reference;
 
 use common::*;
 use reference::conv::{self as rc, Geom};
-use rendernet::ops::conv::{self, Conv, Padding};
+use rendernet::ops::conv::{self, Conv, ConvKernel, Padding};
 use rendernet::ops::conv_transpose::ConvTranspose;
 
 const ATOL: f64 = 1e-4;
@@ -42,6 +42,7 @@ impl Op {
 #[derive(Clone, Copy, Debug)]
 struct Case {
     op: Op,
+    kernel: ConvKernel,
     d2: bool,
     n: usize,
     ci: usize,
@@ -133,8 +134,8 @@ fn forward(c: &Case, rng: &mut Rng) -> Forward {
     let b = f32_round(&rng.vec(c.co, -1.0, 1.0));
     let (tx, tw, tb, ty) = (upload(&xs, &x), upload(&ws, &w), upload(&[c.co], &b), zeros(&ys));
     run(|p| match c.op {
-        Op::Conv(op) => op.forward(gpu(), p, &tx, &tw, Some(&tb), &ty),
-        Op::Transposed(op) => op.forward(gpu(), p, &tx, &tw, Some(&tb), &ty),
+        Op::Conv(op) => op.forward_with(c.kernel, gpu(), p, &tx, &tw, Some(&tb), &ty),
+        Op::Transposed(op) => op.forward_with(c.kernel, gpu(), p, &tx, &tw, Some(&tb), &ty),
     });
     let want = reference(c, &g, &x, &w, Some(&b));
     Forward { y: download(&ty), x, w, b, want, g }
@@ -153,12 +154,12 @@ fn check(c: &Case, seed: u64) {
     run(|p| {
         match c.op {
             Op::Conv(op) => {
-                op.backward_input(gpu(), p, &tr, &tw, &tdx)?;
-                op.backward_weight(gpu(), p, &tx, &tr, &tdw)?;
+                op.backward_input_with(c.kernel, gpu(), p, &tr, &tw, &tdx)?;
+                op.backward_weight_with(c.kernel, gpu(), p, &tx, &tr, &tdw)?;
             }
             Op::Transposed(op) => {
-                op.backward_input(gpu(), p, &tr, &tw, &tdx)?;
-                op.backward_weight(gpu(), p, &tx, &tr, &tdw)?;
+                op.backward_input_with(c.kernel, gpu(), p, &tr, &tw, &tdx)?;
+                op.backward_weight_with(c.kernel, gpu(), p, &tx, &tr, &tdw)?;
             }
         }
         conv::backward_bias(gpu(), p, &tr, &tdb)
@@ -174,12 +175,12 @@ fn check(c: &Case, seed: u64) {
 
 fn conv3d(kernel: [usize; 3], stride: [usize; 3], padding: Padding) -> Case {
     let op = Op::Conv(Conv::conv3d(kernel, stride, padding));
-    Case { op, d2: false, n: 2, ci: 3, co: 5, input: [5, 6, 7], output: None }
+    Case { op, kernel: ConvKernel::Reference, d2: false, n: 2, ci: 3, co: 5, input: [5, 6, 7], output: None }
 }
 
 fn conv2d(kernel: [usize; 2], stride: [usize; 2], padding: Padding) -> Case {
     let op = Op::Conv(Conv::conv2d(kernel, stride, padding));
-    Case { op, d2: true, n: 2, ci: 3, co: 5, input: [1, 7, 9], output: None }
+    Case { op, kernel: ConvKernel::Reference, d2: true, n: 2, ci: 3, co: 5, input: [1, 7, 9], output: None }
 }
 
 fn explicit(before: [usize; 3], after: [usize; 3]) -> Padding {
@@ -233,12 +234,12 @@ fn conv2d_strided_1x1_and_explicit() {
 
 fn transposed2d(kernel: [usize; 2], stride: [usize; 2], padding: Padding, output: Option<[usize; 3]>) -> Case {
     let op = Op::Transposed(ConvTranspose::conv2d(kernel, stride, padding));
-    Case { op, d2: true, n: 2, ci: 3, co: 5, input: [1, 4, 5], output }
+    Case { op, kernel: ConvKernel::Reference, d2: true, n: 2, ci: 3, co: 5, input: [1, 4, 5], output }
 }
 
 fn transposed3d(kernel: [usize; 3], stride: [usize; 3], padding: Padding, output: Option<[usize; 3]>) -> Case {
     let op = Op::Transposed(ConvTranspose::conv3d(kernel, stride, padding));
-    Case { op, d2: false, n: 2, ci: 3, co: 5, input: [3, 4, 5], output }
+    Case { op, kernel: ConvKernel::Reference, d2: false, n: 2, ci: 3, co: 5, input: [3, 4, 5], output }
 }
 
 #[test]
@@ -258,6 +259,92 @@ fn conv_transpose2d_explicit_and_output_padding() {
 fn conv_transpose3d_same_and_explicit() {
     check(&transposed3d([4, 4, 4], [2, 2, 2], Padding::Same, None), 34);
     check(&transposed3d([3, 2, 3], [1, 2, 2], explicit([1, 0, 2], [0, 1, 1]), None), 35);
+}
+
+/// Every case above, again with the tiled kernels forced (`ConvKernel::Fast`; passes they do
+/// not support fall back to the reference kernels, which is what callers get too).
+fn check_fast(c: Case, seed: u64) {
+    check(&Case { kernel: ConvKernel::Fast, ..c }, seed);
+}
+
+#[test]
+fn fast_conv3d_forward_and_gradients() {
+    check_fast(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 40);
+    check_fast(conv3d([3, 3, 3], [1, 1, 2], Padding::Same), 41);
+    check_fast(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 42);
+    check_fast(conv3d([2, 3, 4], [1, 1, 1], Padding::Same), 43);
+    check_fast(conv3d([1, 1, 1], [1, 1, 1], Padding::Same), 44);
+    check_fast(conv3d([3, 3, 3], [2, 2, 2], explicit([1, 0, 2], [0, 2, 1])), 45);
+}
+
+#[test]
+fn fast_conv2d_and_transposed_forward_and_gradients() {
+    check_fast(conv2d([3, 3], [1, 1], Padding::Same), 50);
+    check_fast(conv2d([4, 4], [1, 1], Padding::Same), 51);
+    check_fast(conv2d([4, 3], [2, 1], Padding::explicit_2d([2, 0], [1, 1])), 52);
+    check_fast(transposed2d([4, 4], [2, 2], Padding::Same, None), 53);
+    check_fast(transposed2d([4, 4], [1, 1], Padding::Same, None), 54);
+    check_fast(transposed2d([3, 3], [2, 2], Padding::explicit_2d([1, 1], [1, 1]), Some([1, 8, 10])), 55);
+    check_fast(transposed3d([3, 2, 3], [1, 2, 2], explicit([1, 0, 2], [0, 1, 1]), None), 56);
+}
+
+/// Runs all three passes of `c` with `kernel` on fixed random inputs; returns (y, dx, dw).
+fn passes(c: &Case, kernel: ConvKernel, seed: u64) -> [Vec<f64>; 3] {
+    let g = geom(c);
+    let (xs, ws, ys) = (shape(c.d2, c.n, c.ci, g.input), w_shape(c), shape(c.d2, c.n, c.co, g.output));
+    let numel = |s: &[usize]| s.iter().product::<usize>();
+    let mut rng = Rng(seed);
+    let (x, w) = (rng.vec(numel(&xs), -1.0, 1.0), rng.vec(numel(&ws), -1.0, 1.0));
+    let (b, r) = (rng.vec(c.co, -1.0, 1.0), rng.vec(numel(&ys), -1.0, 1.0));
+    let (tx, tw, tb, tr) = (upload(&xs, &x), upload(&ws, &w), upload(&[c.co], &b), upload(&ys, &r));
+    let (ty, tdx, tdw) = (zeros(&ys), zeros(&xs), zeros(&ws));
+    run(|p| match c.op {
+        Op::Conv(op) => {
+            op.forward_with(kernel, gpu(), p, &tx, &tw, Some(&tb), &ty)?;
+            op.backward_input_with(kernel, gpu(), p, &tr, &tw, &tdx)?;
+            op.backward_weight_with(kernel, gpu(), p, &tx, &tr, &tdw)
+        }
+        Op::Transposed(op) => {
+            op.forward_with(kernel, gpu(), p, &tx, &tw, Some(&tb), &ty)?;
+            op.backward_input_with(kernel, gpu(), p, &tr, &tw, &tdx)?;
+            op.backward_weight_with(kernel, gpu(), p, &tx, &tr, &tdw)
+        }
+    });
+    [download(&ty), download(&tdx), download(&tdw)]
+}
+
+/// The tiled kernels against the reference kernels on random shapes with channel counts that
+/// are not multiples of the tiles (4 input channels, 16 output channels, 8 positions) and
+/// spatial sizes not multiples of 8. Sums here reach Cin*k^3 <= 20*27 (forward, dx) and
+/// N*|out| <= 2*900 (dw) products of values in [-1, 1]; both kernels' f32 errors are then
+/// ~sqrt(1800)*6e-8*|terms| < 1e-4 apart, so atol 1e-3 + rtol 1e-4 still catches any
+/// dropped term (>= 1e-2 for uniform data).
+#[test]
+fn fast_matches_reference_on_random_shapes() {
+    for seed in 200..210u64 {
+        let mut rng = Rng(seed);
+        let mut pick = |lo: usize, hi: usize| lo + (rng.next_u64() % (hi - lo + 1) as u64) as usize;
+        let d2 = seed % 2 == 1;
+        let mut kernel = [pick(1, 3), pick(1, 4), pick(1, 4)];
+        let mut stride = [pick(1, 2), pick(1, 2), pick(1, 2)];
+        let mut input = [pick(3, 6), pick(3, 9), pick(5, 19)];
+        if d2 {
+            (kernel[0], stride[0], input[0]) = (1, 1, 1);
+        }
+        // Every third case at stride 1, where backward-input takes the tiled path too.
+        if seed % 3 == 0 {
+            stride = [1, 1, 1];
+        }
+        let (n, ci, co) = (pick(1, 2), pick(1, 20), pick(1, 35));
+        let h = Conv { kernel, stride, padding: Padding::Same };
+        let op = if seed % 4 < 2 { Op::Conv(h) } else { Op::Transposed(ConvTranspose { conv: h }) };
+        let c = Case { op, kernel: ConvKernel::Fast, d2, n, ci, co, input, output: None };
+        let fast = passes(&c, ConvKernel::Fast, seed);
+        let slow = passes(&c, ConvKernel::Reference, seed);
+        for (k, what) in ["forward", "dx", "dw"].iter().enumerate() {
+            assert_close(&format!("seed {seed}: {c:?} {what}"), &fast[k], &slow[k], 1e-3, 1e-4);
+        }
+    }
 }
 
 /// Random shapes and hyper-parameters, forward only (the gradients share these kernels and
@@ -284,7 +371,7 @@ fn random_shapes_forward() {
         let (n, ci, co) = (pick(1, 3), pick(1, 5), pick(1, 5));
         let h = Conv { kernel, stride, padding };
         let op = if seed % 2 == 0 { Op::Conv(h) } else { Op::Transposed(ConvTranspose { conv: h }) };
-        let c = Case { op, d2, n, ci, co, input, output: None };
+        let c = Case { op, kernel: ConvKernel::Reference, d2, n, ci, co, input, output: None };
         let Forward { y, want, .. } = forward(&c, &mut Rng(seed + 1000));
         assert_close(&format!("seed {seed}: {c:?} forward"), &y, &want, ATOL, RTOL);
     }

@@ -9,10 +9,20 @@ use rendernet::ops::projection;
 
 #[test]
 fn projection_forward_and_backward() {
-    // x [N, C, D, H, W] = [2, 3, 5, 4, 7] folds to K = 15; O = 6; S = 28.
-    let (n, c, d, h, w, o) = (2, 3, 5, 4, 7, 6);
+    // x [N, C, D, H, W] = [2, 3, 5, 4, 7] folds to K = 15; O = 6; S = 28 (projection.wgsl).
+    check(2, 3, 5, 4, 7, 6, 11);
+}
+
+#[test]
+fn wide_projection_takes_the_tiled_path() {
+    // O = 19 >= 8 output channels: the tiled conv kernels, with O not a multiple of their
+    // 16-channel tile, K = 21 not a multiple of 4 and W = 11 not a multiple of 8.
+    check(2, 7, 3, 3, 11, 19, 12);
+}
+
+fn check(n: usize, c: usize, d: usize, h: usize, w: usize, o: usize, seed: u64) {
     let (k, s) = (c * d, h * w);
-    let mut rng = Rng(11);
+    let mut rng = Rng(seed);
     let x = f32_round(&rng.vec(n * k * s, -1.0, 1.0));
     let wt = f32_round(&rng.vec(o * k, -0.5, 0.5));
     let b = f32_round(&rng.vec(o, -0.5, 0.5));
@@ -27,7 +37,7 @@ fn projection_forward_and_backward() {
         projection::backward_weight(gpu(), p, &tx, &tr, &tdw)?;
         projection::backward_bias(gpu(), p, &tr, &tdb)
     });
-    // Sums of K = 15 (forward, dx: O = 6; dw, db: N*S = 56) terms of size <= 1.
+    // Sums of K <= 21 (forward), O <= 19 (dx), N*S <= 66 (dw, db) terms of size <= 1.
     assert_close("projection forward", &download(&ty), &proj_ref(&x, &wt, &b, n, k, o, s), 1e-5, 1e-4);
     let l = |x: &[f64], w: &[f64], b: &[f64]| dot(&r, &proj_ref(x, w, b, n, k, o, s));
     assert_close("projection backward input", &download(&tdx), &fd_grad(&x, |x| l(x, &wt, &b)), 1e-5, 1e-4);

@@ -9,6 +9,7 @@
 //!
 //! Start with [`gpu::Gpu::new`], make [`gpu::Tensor`]s, and record ops into a compute pass.
 
+pub mod bench;
 pub mod data;
 pub mod error;
 pub mod gpu;

@@ -34,6 +34,10 @@ enum Cmd {
     Train(cli::train::TrainArgs),
     /// Mean held-out PSNR (95% interval) and per-shape PSNR of trained weights.
     Eval(cli::eval::EvalArgs),
+    /// Time the conv, transposed-conv and projection kernels (reference and tiled) on shapes
+    /// from the RenderNet presets: median ms and GFLOP/s per pass, GPU timestamps when the
+    /// adapter has them.
+    Bench(cli::bench::BenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -50,6 +54,7 @@ fn main() -> ExitCode {
         Cmd::Train(a) => cli::train::run(a),
         Cmd::Render(a) => cli::render::run(a),
         Cmd::Eval(a) => cli::eval::run(a),
+        Cmd::Bench(a) => cli::bench::run(a),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

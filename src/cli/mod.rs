@@ -1,5 +1,6 @@
 //! Subcommand implementations: parse, call the library, report.
 
+pub mod bench;
 pub mod dataset;
 pub mod eval;
 pub mod info;

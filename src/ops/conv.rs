@@ -1,14 +1,29 @@
 //! 3D and 2D convolution (binds `shaders/conv.wgsl`): any kernel size, per-axis stride,
 //! asymmetric padding, optional bias. A 2D conv is the 3D kernel with depth 1 (NCHW seen as
-//! NC1HW, OIHW as OI1HW), so one shader serves both. The kernels are reference-quality
-//! (one invocation per output value, deterministic); faster kernels can slot in behind
-//! [`Conv`]'s methods without changing callers.
+//! NC1HW, OIHW as OI1HW), so one shader serves both. `conv.wgsl` holds the reference kernels
+//! (one invocation per output value, deterministic), the tests' oracle; the tiled kernels of
+//! `shaders/conv_fast.wgsl` (module `conv_fast`) run behind the same methods where
+//! [`ConvKernel::Auto`] picks them. Both are deterministic.
 
-use super::{expect_rank, expect_shape};
+use super::{conv_fast, expect_rank, expect_shape};
 use crate::error::{Result, shape_err};
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
 
 const SHADER: Shader = Shader { name: "conv", source: include_str!("../../shaders/conv.wgsl") };
+
+/// Which kernels a conv call runs. `Auto` (what [`Conv::forward`] and friends use) picks
+/// the tiled kernels where they apply and pay (a small table by channel counts); the others force a choice so
+/// tests and `rendernet bench` can compare the two on the same call.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ConvKernel {
+    /// Choose by shape.
+    #[default]
+    Auto,
+    /// The reference kernels: one invocation per output value.
+    Reference,
+    /// The tiled kernels wherever they support the shape (else the reference).
+    Fast,
+}
 
 /// How a conv pads its input, per spatial axis (depth, height, width).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -153,6 +168,13 @@ impl Conv {
         Ok(self.geometry("conv", x_shape, w_shape)?.y_shape())
     }
 
+    /// Whether `kernel` runs the tiled kernels for `pass` of this conv on input `x_shape`
+    /// and weights `w_shape` (for benchmarks and tests: `Fast` falls back to the reference
+    /// kernels where the tiled ones do not apply).
+    pub fn runs_fast(&self, kernel: ConvKernel, pass: Pass, x_shape: &[usize], w_shape: &[usize]) -> Result<bool> {
+        Ok(use_fast(kernel, pass, &self.geometry("conv", x_shape, w_shape)?))
+    }
+
     /// Resolves the shapes of a call, checking everything the kernels rely on.
     pub(crate) fn geometry(&self, op: &str, x_shape: &[usize], w_shape: &[usize]) -> Result<Geometry> {
         let rank = x_shape.len();
@@ -209,11 +231,26 @@ impl Conv {
         b: Option<&Tensor>,
         y: &Tensor,
     ) -> Result<()> {
+        self.forward_with(ConvKernel::Auto, gpu, pass, x, w, b, y)
+    }
+
+    /// [`Conv::forward`] with an explicit kernel choice.
+    #[allow(clippy::too_many_arguments)]
+    pub fn forward_with(
+        &self,
+        kernel: ConvKernel,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        x: &Tensor,
+        w: &Tensor,
+        b: Option<&Tensor>,
+        y: &Tensor,
+    ) -> Result<()> {
         const OP: &str = "conv_forward";
         let g = self.geometry(OP, x.shape(), w.shape())?;
         expect_shape(OP, "y", y, &g.y_shape())?;
         check_bias(OP, b, g.co)?;
-        dispatch_forward(gpu, pass, &g, x, w, b, y)
+        dispatch_forward(kernel, gpu, pass, &g, x, w, b, y)
     }
 
     /// `dx = dL/dx` from `dy = dL/dy` (shape of `y`) and the weights; `dx` has `x`'s shape.
@@ -225,10 +262,23 @@ impl Conv {
         w: &Tensor,
         dx: &Tensor,
     ) -> Result<()> {
+        self.backward_input_with(ConvKernel::Auto, gpu, pass, dy, w, dx)
+    }
+
+    /// [`Conv::backward_input`] with an explicit kernel choice.
+    pub fn backward_input_with(
+        &self,
+        kernel: ConvKernel,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        dy: &Tensor,
+        w: &Tensor,
+        dx: &Tensor,
+    ) -> Result<()> {
         const OP: &str = "conv_backward_input";
         let g = self.geometry(OP, dx.shape(), w.shape())?;
         expect_shape(OP, "dy", dy, &g.y_shape())?;
-        dispatch_backward_input(gpu, pass, &g, dy, w, None, dx)
+        dispatch_backward_input(kernel, gpu, pass, &g, dy, w, None, dx)
     }
 
     /// `dw = dL/dw` from the forward input `x` and `dy`; `dw` has the weights' shape.
@@ -240,10 +290,23 @@ impl Conv {
         dy: &Tensor,
         dw: &Tensor,
     ) -> Result<()> {
+        self.backward_weight_with(ConvKernel::Auto, gpu, pass, x, dy, dw)
+    }
+
+    /// [`Conv::backward_weight`] with an explicit kernel choice.
+    pub fn backward_weight_with(
+        &self,
+        kernel: ConvKernel,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        x: &Tensor,
+        dy: &Tensor,
+        dw: &Tensor,
+    ) -> Result<()> {
         const OP: &str = "conv_backward_weight";
         let g = self.geometry(OP, x.shape(), dw.shape())?;
         expect_shape(OP, "dy", dy, &g.y_shape())?;
-        dispatch_backward_weight(gpu, pass, &g, x, dy, dw)
+        dispatch_backward_weight(kernel, gpu, pass, &g, x, dy, dw)
     }
 }
 
@@ -272,8 +335,42 @@ fn bias_arg(b: Option<&Tensor>) -> Arg<'_> {
     b.map_or(Arg::Absent, Arg::R)
 }
 
-/// Records `conv_forward` for `g` (shapes already checked by the caller): `y = conv(x, w) + b`.
+/// The three passes of a conv, each with its own kernels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pass {
+    /// `y = conv(x, w) + b`.
+    Forward,
+    /// `dx` from `dy` and `w`.
+    BackwardInput,
+    /// `dw` from `x` and `dy`.
+    BackwardWeight,
+}
+
+/// Whether `kernel` runs the tiled kernel for `pass` of `g`. `Auto`'s table: the tiled
+/// kernels win once there are enough channels to fill their 16-wide output-channel tile
+/// (measured with `rendernet bench`); tiny layers (the 1-3 channel ends of the network, the
+/// tests' shapes) keep the reference kernels, which waste no padded lanes.
+pub(crate) fn use_fast(kernel: ConvKernel, pass: Pass, g: &Geometry) -> bool {
+    if pass == Pass::BackwardInput && !conv_fast::supports_backward_input(g) {
+        return false;
+    }
+    match kernel {
+        ConvKernel::Reference => false,
+        ConvKernel::Fast => true,
+        ConvKernel::Auto => {
+            let (c_in, c_out) = match pass {
+                Pass::BackwardInput => (g.co, g.ci),
+                _ => (g.ci, g.co),
+            };
+            c_in >= 4 && c_out >= 8
+        }
+    }
+}
+
+/// Records the forward conv of `g` (shapes already checked by the caller): `y = conv(x, w) + b`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn dispatch_forward(
+    kernel: ConvKernel,
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
     g: &Geometry,
@@ -282,14 +379,19 @@ pub(crate) fn dispatch_forward(
     b: Option<&Tensor>,
     y: &Tensor,
 ) -> Result<()> {
+    if use_fast(kernel, Pass::Forward, g) {
+        return conv_fast::forward(gpu, pass, g, x, w, b, y);
+    }
     let total = y.numel();
     let args = [Arg::R(x), Arg::R(w), bias_arg(b), Arg::W(y)];
     gpu.dispatch(pass, SHADER, "conv_forward", &g.params(b.is_some(), total), &args, grid_1d(total as u64, 64)?)
 }
 
-/// Records `conv_backward_input` for `g` (shapes checked by the caller): `dx = conv^T(dy, w)
-/// + b`, the bias being added over `dx`'s channels (only the transposed conv passes one).
+/// Records the backward-input conv of `g` (shapes checked by the caller): `dx = conv^T(dy,
+/// w) + b`, the bias being added over `dx`'s channels (only the transposed conv passes one).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn dispatch_backward_input(
+    kernel: ConvKernel,
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
     g: &Geometry,
@@ -298,14 +400,19 @@ pub(crate) fn dispatch_backward_input(
     b: Option<&Tensor>,
     dx: &Tensor,
 ) -> Result<()> {
+    if use_fast(kernel, Pass::BackwardInput, g) {
+        return conv_fast::backward_input(gpu, pass, g, dy, w, b, dx);
+    }
     let total = dx.numel();
     let args = [Arg::R(dy), Arg::R(w), bias_arg(b), Arg::W(dx)];
     let params = g.params(b.is_some(), total);
     gpu.dispatch(pass, SHADER, "conv_backward_input", &params, &args, grid_1d(total as u64, 64)?)
 }
 
-/// Records `conv_backward_weight` for `g` (shapes checked by the caller).
+/// Records the backward-weight conv of `g` (shapes checked by the caller).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn dispatch_backward_weight(
+    kernel: ConvKernel,
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
     g: &Geometry,
@@ -313,6 +420,9 @@ pub(crate) fn dispatch_backward_weight(
     dy: &Tensor,
     dw: &Tensor,
 ) -> Result<()> {
+    if use_fast(kernel, Pass::BackwardWeight, g) {
+        return conv_fast::backward_weight(gpu, pass, g, x, dy, dw);
+    }
     let total = dw.numel();
     let args = [Arg::R(x), Arg::R(dy), Arg::W(dw)];
     let params = g.params(false, total);

@@ -14,7 +14,7 @@
 //! | backward_weight             | `conv_backward_weight` | `x := dy_t`, `dy := x_t`      |
 //! | backward_bias               | [`conv::backward_bias`] over `dy`'s channels           |
 
-use super::conv::{self, Conv, Geometry, Padding, check_bias};
+use super::conv::{self, Conv, ConvKernel, Geometry, Padding, check_bias};
 use crate::error::{Result, shape_err};
 use crate::gpu::{Gpu, Tensor};
 
@@ -77,6 +77,26 @@ impl ConvTranspose {
         Ok(y)
     }
 
+    /// Whether `kernel` runs the tiled kernels for `pass` of this transposed conv with input
+    /// `x_shape`, weights `w_shape` and output `y_shape` (see [`Conv::runs_fast`]).
+    pub fn runs_fast(
+        &self,
+        kernel: ConvKernel,
+        pass: conv::Pass,
+        x_shape: &[usize],
+        w_shape: &[usize],
+        y_shape: &[usize],
+    ) -> Result<bool> {
+        let g = self.geometry("conv_transpose", x_shape, w_shape, y_shape)?;
+        // The roles swap as in the module table.
+        let bound = match pass {
+            conv::Pass::Forward => conv::Pass::BackwardInput,
+            conv::Pass::BackwardInput => conv::Pass::Forward,
+            conv::Pass::BackwardWeight => conv::Pass::BackwardWeight,
+        };
+        Ok(conv::use_fast(kernel, bound, &g))
+    }
+
     /// Resolves a call: the equivalent forward conv of `y_shape` must give `x_shape`.
     fn geometry(&self, op: &str, x_shape: &[usize], w_shape: &[usize], y_shape: &[usize]) -> Result<Geometry> {
         let g = self.conv.geometry(op, y_shape, w_shape)?;
@@ -103,10 +123,25 @@ impl ConvTranspose {
         b: Option<&Tensor>,
         y: &Tensor,
     ) -> Result<()> {
+        self.forward_with(ConvKernel::Auto, gpu, pass, x, w, b, y)
+    }
+
+    /// [`ConvTranspose::forward`] with an explicit kernel choice.
+    #[allow(clippy::too_many_arguments)]
+    pub fn forward_with(
+        &self,
+        kernel: ConvKernel,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        x: &Tensor,
+        w: &Tensor,
+        b: Option<&Tensor>,
+        y: &Tensor,
+    ) -> Result<()> {
         const OP: &str = "conv_transpose_forward";
         let g = self.geometry(OP, x.shape(), w.shape(), y.shape())?;
         check_bias(OP, b, g.ci)?;
-        conv::dispatch_backward_input(gpu, pass, &g, x, w, b, y)
+        conv::dispatch_backward_input(kernel, gpu, pass, &g, x, w, b, y)
     }
 
     /// `dx = dL/dx` from `dy = dL/dy` and the weights: the equivalent forward conv of `dy`.
@@ -118,9 +153,23 @@ impl ConvTranspose {
         w: &Tensor,
         dx: &Tensor,
     ) -> Result<()> {
+        self.backward_input_with(ConvKernel::Auto, gpu, pass, dy, w, dx)
+    }
+
+    /// [`ConvTranspose::backward_input`] with an explicit kernel choice.
+    #[allow(clippy::too_many_arguments)]
+    pub fn backward_input_with(
+        &self,
+        kernel: ConvKernel,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        dy: &Tensor,
+        w: &Tensor,
+        dx: &Tensor,
+    ) -> Result<()> {
         const OP: &str = "conv_transpose_backward_input";
         let g = self.geometry(OP, dx.shape(), w.shape(), dy.shape())?;
-        conv::dispatch_forward(gpu, pass, &g, dy, w, None, dx)
+        conv::dispatch_forward(kernel, gpu, pass, &g, dy, w, None, dx)
     }
 
     /// `dw = dL/dw` from the forward input `x` and `dy`; `dw` is `[Cin, Cout, k...]`.
@@ -132,9 +181,23 @@ impl ConvTranspose {
         dy: &Tensor,
         dw: &Tensor,
     ) -> Result<()> {
+        self.backward_weight_with(ConvKernel::Auto, gpu, pass, x, dy, dw)
+    }
+
+    /// [`ConvTranspose::backward_weight`] with an explicit kernel choice.
+    #[allow(clippy::too_many_arguments)]
+    pub fn backward_weight_with(
+        &self,
+        kernel: ConvKernel,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        x: &Tensor,
+        dy: &Tensor,
+        dw: &Tensor,
+    ) -> Result<()> {
         const OP: &str = "conv_transpose_backward_weight";
         let g = self.geometry(OP, x.shape(), dw.shape(), dy.shape())?;
-        conv::dispatch_backward_weight(gpu, pass, &g, dy, x, dw)
+        conv::dispatch_backward_weight(kernel, gpu, pass, &g, dy, x, dw)
     }
 
     /// `db = dL/db`, summing `dy` over batch and space (same as [`conv::backward_bias`]).

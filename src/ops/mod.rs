@@ -10,6 +10,7 @@ pub mod adam;
 pub mod add;
 pub mod conv;
 pub mod conv_transpose;
+mod conv_fast;
 pub mod dropout;
 pub mod elu;
 pub mod finite;

@@ -2,7 +2,10 @@
 //! `shaders/projection.wgsl`). The camera-aligned grid `[N, C, D, H, W]` is read as
 //! `[N, C*D, H, W]` (channel `c*D + d`, a free view), then mixed by weights `[O, C*D, 1, 1]`
 //! (PyTorch's 1x1 conv layout) and bias `[O]` into `[N, O, H, W]`. PReLU follows as its own op.
+//! Wide layers (the real ones: K = 512..1024) run the tiled conv kernels as a matmul (the
+//! choice is `conv`'s `Auto` table); `shaders/projection.wgsl` serves the narrow ones.
 
+use super::conv::{self, ConvKernel, Geometry, Pass};
 use super::{expect_shape, reduce};
 use crate::error::{Result, shape_err};
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
@@ -56,6 +59,13 @@ impl ProjectionDims {
         vec![self.n, self.o, self.h, self.w]
     }
 
+    /// The 1x1 conv this projection is, for the conv kernels' `Auto` choice (the tiled conv
+    /// kernels do a 1x1 conv as a plain matmul: one tap, stride 1, no padding).
+    fn geometry(&self) -> Geometry {
+        let sp = [1, self.h, self.w];
+        Geometry { n: self.n, ci: self.k, co: self.o, input: sp, output: sp, kernel: [1; 3], stride: [1; 3], pad: [0; 3], rank: 4 }
+    }
+
     fn params(&self) -> Params {
         Params { n: self.n as u32, k: self.k as u32, o: self.o as u32, s: (self.h * self.w) as u32 }
     }
@@ -63,25 +73,74 @@ impl ProjectionDims {
 
 /// `y[n,o] = Σ_k w[o,k] x[n,k] + b[o]` per pixel.
 pub fn forward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, w: &Tensor, b: &Tensor, y: &Tensor) -> Result<()> {
+    forward_with(ConvKernel::Auto, gpu, pass, x, w, b, y)
+}
+
+/// [`forward`] with an explicit kernel choice (`Reference` is `projection.wgsl`).
+pub fn forward_with(
+    kernel: ConvKernel,
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    x: &Tensor,
+    w: &Tensor,
+    b: &Tensor,
+    y: &Tensor,
+) -> Result<()> {
     let d = ProjectionDims::new(x.shape(), w.shape())?;
     expect_shape("projection", "bias", b, &[d.o])?;
     expect_shape("projection", "output", y, &d.output_shape())?;
+    let g = d.geometry();
+    if conv::use_fast(kernel, Pass::Forward, &g) {
+        return conv::dispatch_forward(ConvKernel::Fast, gpu, pass, &g, x, w, Some(b), y);
+    }
     let args = [Arg::R(x), Arg::R(w), Arg::R(b), Arg::W(y)];
     gpu.dispatch(pass, SHADER, "projection_forward", &d.params(), &args, grid_1d(y.numel() as u64, 64)?)
 }
 
 /// `dx = wᵀ dy` (shape of `x`).
 pub fn backward_input(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, dy: &Tensor, w: &Tensor, dx: &Tensor) -> Result<()> {
+    backward_input_with(ConvKernel::Auto, gpu, pass, dy, w, dx)
+}
+
+/// [`backward_input`] with an explicit kernel choice.
+pub fn backward_input_with(
+    kernel: ConvKernel,
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    dy: &Tensor,
+    w: &Tensor,
+    dx: &Tensor,
+) -> Result<()> {
     let d = ProjectionDims::new(dx.shape(), w.shape())?;
     expect_shape("projection", "dy", dy, &d.output_shape())?;
+    let g = d.geometry();
+    if conv::use_fast(kernel, Pass::BackwardInput, &g) {
+        return conv::dispatch_backward_input(ConvKernel::Fast, gpu, pass, &g, dy, w, None, dx);
+    }
     let args = [Arg::R(dy), Arg::R(w), Arg::W(dx)];
     gpu.dispatch(pass, SHADER, "projection_backward_input", &d.params(), &args, grid_1d(dx.numel() as u64, 64)?)
 }
 
 /// `dw = Σ_n dy xᵀ` (shape `[O, K, 1, 1]`).
 pub fn backward_weight(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, dy: &Tensor, dw: &Tensor) -> Result<()> {
+    backward_weight_with(ConvKernel::Auto, gpu, pass, x, dy, dw)
+}
+
+/// [`backward_weight`] with an explicit kernel choice.
+pub fn backward_weight_with(
+    kernel: ConvKernel,
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    x: &Tensor,
+    dy: &Tensor,
+    dw: &Tensor,
+) -> Result<()> {
     let d = ProjectionDims::new(x.shape(), dw.shape())?;
     expect_shape("projection", "dy", dy, &d.output_shape())?;
+    let g = d.geometry();
+    if conv::use_fast(kernel, Pass::BackwardWeight, &g) {
+        return conv::dispatch_backward_weight(ConvKernel::Fast, gpu, pass, &g, x, dy, dw);
+    }
     let args = [Arg::R(x), Arg::R(dy), Arg::W(dw)];
     gpu.dispatch(pass, SHADER, "projection_backward_weight", &d.params(), &args, grid_1d(dw.numel() as u64, 64)?)
 }

@@ -1,0 +1,81 @@
+//! Kernel timing for `rendernet bench`: GPU timestamps around a pass of repeated dispatches
+//! where the device has them, wall time around submit + wait otherwise, median over repeats.
+
+use crate::error::{Error, Result};
+use crate::gpu::Gpu;
+
+/// Records one call of the kernel being timed into a pass.
+pub type Record<'a> = dyn FnMut(&mut wgpu::ComputePass<'_>) -> Result<()> + 'a;
+
+/// How one sample is timed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Clock {
+    /// Timestamps written at the beginning and end of the pass.
+    Gpu,
+    /// Host time around submit and wait (includes submit overhead, amortised over the calls).
+    Wall,
+}
+
+/// Times `calls` calls of `record`, all recorded into one pass of one submit, and returns
+/// milliseconds per call. Several calls per pass amortise the submit and wait (0.1-0.5 ms
+/// on lavapipe) when `Clock::Wall` is used, and pass begin/end costs with timestamps.
+pub fn time_calls(gpu: &Gpu, clock: Clock, calls: u32, record: &mut Record) -> Result<f64> {
+    let calls = calls.max(1);
+    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    let query = (clock == Clock::Gpu).then(|| {
+        gpu.device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("bench"), ty: wgpu::QueryType::Timestamp, count: 2 })
+    });
+    {
+        let timestamp_writes = query.as_ref().map(|q| wgpu::ComputePassTimestampWrites {
+            query_set: q,
+            beginning_of_pass_write_index: Some(0),
+            end_of_pass_write_index: Some(1),
+        });
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("bench"), timestamp_writes });
+        for _ in 0..calls {
+            record(&mut pass)?;
+        }
+    }
+    let Some(q) = query else {
+        let t = std::time::Instant::now();
+        gpu.submit_and_wait(enc)?;
+        return Ok(t.elapsed().as_secs_f64() * 1e3 / calls as f64);
+    };
+    let usage = |u| wgpu::BufferDescriptor { label: None, size: 16, usage: u, mapped_at_creation: false };
+    let resolve = gpu.device.create_buffer(&usage(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC));
+    let read = gpu.device.create_buffer(&usage(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST));
+    enc.resolve_query_set(&q, 0..2, &resolve, 0);
+    enc.copy_buffer_to_buffer(&resolve, 0, &read, 0, 16);
+    gpu.submit_and_wait(enc)?;
+    read.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+    gpu.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| Error::Readback(format!("timestamp readback: {e}")))?;
+    let ticks: [u64; 2] = {
+        let view = read.slice(..).get_mapped_range().map_err(|e| Error::Readback(format!("timestamp readback: {e}")))?;
+        bytemuck::pod_read_unaligned(&view[..16])
+    };
+    let ns = ticks[1].saturating_sub(ticks[0]) as f64 * gpu.queue.get_timestamp_period() as f64;
+    Ok(ns * 1e-6 / calls as f64)
+}
+
+/// The clock `rendernet bench` uses on `gpu`: timestamps when the device has them.
+pub fn default_clock(gpu: &Gpu) -> Clock {
+    if gpu.has_timestamps() { Clock::Gpu } else { Clock::Wall }
+}
+
+/// How many calls per sample make a sample last about `target_ms`, given one call's time.
+pub fn calls_for(ms_per_call: f64, target_ms: f64) -> u32 {
+    (target_ms / ms_per_call.max(1e-3)).clamp(1.0, 64.0) as u32
+}
+
+/// The median of `v` (the mean of the middle two for even lengths); NaN when empty.
+pub fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(|a, b| a.total_cmp(b));
+    match s.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => s[n / 2],
+        n => 0.5 * (s[n / 2 - 1] + s[n / 2]),
+    }
+}

@@ -1,0 +1,196 @@
+//! `rendernet bench`: times the conv, transposed-conv and projection kernels on shapes from
+//! the RenderNet presets and reports GFLOP/s per (op, shape, pass, kernel).
+
+use clap::Args;
+use rendernet::bench::{self, Clock};
+use rendernet::ops::conv::{Conv, ConvKernel, Padding, Pass};
+use rendernet::ops::conv_transpose::ConvTranspose;
+use rendernet::ops::projection;
+use rendernet::{Gpu, Result, Tensor};
+
+/// Options of `rendernet bench`.
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Print a JSON array (one object per op, shape, pass and kernel) instead of a table.
+    #[arg(long)]
+    json: bool,
+    /// Only cases whose op or shape contains this text (e.g. conv3d, projection).
+    #[arg(long)]
+    filter: Option<String>,
+    /// Samples per measurement; the median is reported.
+    #[arg(long, default_value_t = 5)]
+    repeat: usize,
+    /// Which conv kernels: reference, fast, or both (interleaved, so both see the same load).
+    #[arg(long, default_value = "both", value_parser = ["reference", "fast", "both"])]
+    kernel: String,
+}
+
+/// Records one call of a case's kernel.
+type Recorder = Box<dyn FnMut(&Gpu, &mut wgpu::ComputePass<'_>) -> Result<()>>;
+
+/// One timed thing: a pass of an op on one shape with one kernel choice.
+struct Case {
+    op: &'static str,
+    shape: String,
+    pass: Pass,
+    kernel: &'static str,
+    flops: f64,
+    record: Recorder,
+}
+
+fn pass_name(p: Pass) -> &'static str {
+    match p {
+        Pass::Forward => "forward",
+        Pass::BackwardInput => "backward_input",
+        Pass::BackwardWeight => "backward_weight",
+    }
+}
+
+const PASSES: [Pass; 3] = [Pass::Forward, Pass::BackwardInput, Pass::BackwardWeight];
+
+fn kernels(choice: &str) -> Vec<(&'static str, ConvKernel)> {
+    let all = [("reference", ConvKernel::Reference), ("fast", ConvKernel::Fast)];
+    all.into_iter().filter(|(n, _)| choice == "both" || choice == *n).collect()
+}
+
+/// A forward conv case set: input `xs`, weights `ws` (tensors are zeros: timing only).
+fn conv_cases(gpu: &Gpu, op: &'static str, shape: &str, c: Conv, xs: &[usize], ws: &[usize], choice: &str) -> Result<Vec<Case>> {
+    let ys = c.output_shape(xs, ws)?;
+    let (x, w, y) = (Tensor::zeros(gpu, xs)?, Tensor::zeros(gpu, ws)?, Tensor::zeros(gpu, &ys)?);
+    let b = Tensor::zeros(gpu, &[ws[0]])?;
+    // Multiply-adds: every output value sums Cin * |kernel| products, padding included.
+    let flops = 2.0 * ys.iter().product::<usize>() as f64 * ws[1..].iter().product::<usize>() as f64;
+    let mut out = Vec::new();
+    for pass in PASSES {
+        for (name, k) in kernels(choice) {
+            if name == "fast" && !c.runs_fast(k, pass, xs, ws)? {
+                continue;
+            }
+            let (x, w, y, b) = (x.clone(), w.clone(), y.clone(), b.clone());
+            let record: Recorder = match pass {
+                Pass::Forward => Box::new(move |g, p| c.forward_with(k, g, p, &x, &w, Some(&b), &y)),
+                Pass::BackwardInput => Box::new(move |g, p| c.backward_input_with(k, g, p, &y, &w, &x)),
+                Pass::BackwardWeight => Box::new(move |g, p| c.backward_weight_with(k, g, p, &x, &y, &w)),
+            };
+            out.push(Case { op, shape: shape.into(), pass, kernel: name, flops, record });
+        }
+    }
+    Ok(out)
+}
+
+/// A transposed conv case set: input `xs`, weights `ws` = [Cin, Cout, k...].
+fn transposed_cases(gpu: &Gpu, shape: &str, t: ConvTranspose, xs: &[usize], ws: &[usize], choice: &str) -> Result<Vec<Case>> {
+    let ys = t.output_shape(xs, ws)?;
+    let (x, w, y) = (Tensor::zeros(gpu, xs)?, Tensor::zeros(gpu, ws)?, Tensor::zeros(gpu, &ys)?);
+    let b = Tensor::zeros(gpu, &[ws[1]])?;
+    // The equivalent forward conv's multiply-adds: each input value meets Cout * |kernel| weights.
+    let flops = 2.0 * xs.iter().product::<usize>() as f64 * ws[1..].iter().product::<usize>() as f64;
+    let mut out = Vec::new();
+    for pass in PASSES {
+        for (name, k) in kernels(choice) {
+            if name == "fast" && !t.runs_fast(k, pass, xs, ws, &ys)? {
+                continue;
+            }
+            let (x, w, y, b) = (x.clone(), w.clone(), y.clone(), b.clone());
+            let record: Recorder = match pass {
+                Pass::Forward => Box::new(move |g, p| t.forward_with(k, g, p, &x, &w, Some(&b), &y)),
+                Pass::BackwardInput => Box::new(move |g, p| t.backward_input_with(k, g, p, &y, &w, &x)),
+                Pass::BackwardWeight => Box::new(move |g, p| t.backward_weight_with(k, g, p, &x, &y, &w)),
+            };
+            out.push(Case { op: "conv_transpose2d", shape: shape.into(), pass, kernel: name, flops, record });
+        }
+    }
+    Ok(out)
+}
+
+fn projection_cases(gpu: &Gpu, choice: &str) -> Result<Vec<Case>> {
+    let (n, k, o, h, w) = (1, 512, 256, 64, 64);
+    let x = Tensor::zeros(gpu, &[n, k, h, w])?;
+    let wt = Tensor::zeros(gpu, &[o, k, 1, 1])?;
+    let (b, y) = (Tensor::zeros(gpu, &[o])?, Tensor::zeros(gpu, &[n, o, h, w])?);
+    let flops = 2.0 * (n * k * o * h * w) as f64;
+    let shape = format!("{k}->{o} 1x1 on {h}x{w}, batch {n}");
+    let mut out = Vec::new();
+    for pass in PASSES {
+        for (name, kern) in kernels(choice) {
+            let (x, wt, b, y) = (x.clone(), wt.clone(), b.clone(), y.clone());
+            let record: Recorder = match pass {
+                Pass::Forward => Box::new(move |g, p| projection::forward_with(kern, g, p, &x, &wt, &b, &y)),
+                Pass::BackwardInput => Box::new(move |g, p| projection::backward_input_with(kern, g, p, &y, &wt, &x)),
+                Pass::BackwardWeight => Box::new(move |g, p| projection::backward_weight_with(kern, g, p, &x, &y, &wt)),
+            };
+            out.push(Case { op: "projection", shape: shape.clone(), pass, kernel: name, flops, record });
+        }
+    }
+    Ok(out)
+}
+
+/// The fixed shape list, from the RenderNet presets (see the README's Benchmarks section).
+fn cases(gpu: &Gpu, choice: &str) -> Result<Vec<Case>> {
+    let mut v = Vec::new();
+    let c3 = Conv::conv3d([3, 3, 3], [1, 1, 1], Padding::Same);
+    v.extend(conv_cases(gpu, "conv3d", "16->16 3^3 on 32^3, batch 1", c3, &[1, 16, 32, 32, 32], &[16, 16, 3, 3, 3], choice)?);
+    let c2 = Conv::conv2d([3, 3], [1, 1], Padding::Same);
+    v.extend(conv_cases(gpu, "conv2d", "256->256 3x3 on 32x32, batch 1", c2, &[1, 256, 32, 32], &[256, 256, 3, 3], choice)?);
+    let t = ConvTranspose::conv2d([4, 4], [2, 2], Padding::Same);
+    v.extend(transposed_cases(gpu, "64->32 4x4 s2 on 64x64, batch 1", t, &[1, 64, 64, 64], &[64, 32, 4, 4], choice)?);
+    v.extend(projection_cases(gpu, choice)?);
+    Ok(v)
+}
+
+/// Runs the benchmark and prints a table or JSON.
+pub fn run(a: BenchArgs) -> Result<()> {
+    let gpu = Gpu::new()?;
+    let clock = bench::default_clock(&gpu);
+    let mut all = cases(&gpu, &a.kernel)?;
+    if let Some(f) = &a.filter {
+        all.retain(|c| c.op.contains(f.as_str()) || c.shape.contains(f.as_str()));
+    }
+    let adapter = gpu.info.name.clone();
+    if !a.json {
+        let how = if clock == Clock::Gpu { "GPU timestamps" } else { "wall time" };
+        println!("adapter: {adapter} ({how}; median of {} samples)", a.repeat);
+        println!("{:<17} {:<34} {:<16} {:<9} {:>10} {:>9}", "op", "shape", "pass", "kernel", "ms", "GFLOP/s");
+    }
+    let mut json = Vec::new();
+    // Cases of one (op, shape, pass) are sampled in turn, so kernels compared see the same load.
+    let mut i = 0;
+    while i < all.len() {
+        let j = (i..all.len()).find(|&j| all[j].op != all[i].op || all[j].pass != all[i].pass).unwrap_or(all.len());
+        let group = &mut all[i..j];
+        // Warm-up call: compiles the pipelines (llvmpipe compiles at first dispatch) and sizes
+        // the sample so each lasts ~200 ms.
+        let mut calls = Vec::new();
+        for c in group.iter_mut() {
+            let (g, rec) = (&gpu, &mut c.record);
+            bench::time_calls(&gpu, clock, 1, &mut |p| rec(g, p))?;
+            let once = bench::time_calls(&gpu, clock, 1, &mut |p| rec(g, p))?;
+            calls.push(bench::calls_for(once, 200.0));
+        }
+        let mut samples = vec![Vec::new(); group.len()];
+        for _ in 0..a.repeat.max(1) {
+            for (k, c) in group.iter_mut().enumerate() {
+                let (g, rec) = (&gpu, &mut c.record);
+                samples[k].push(bench::time_calls(&gpu, clock, calls[k], &mut |p| rec(g, p))?);
+            }
+        }
+        for (k, c) in group.iter().enumerate() {
+            let ms = bench::median(&samples[k]);
+            let gflops = c.flops / (ms * 1e6);
+            let pass = pass_name(c.pass);
+            if a.json {
+                json.push(format!(
+                    "{{\"op\":\"{}\",\"shape\":\"{}\",\"pass\":\"{pass}\",\"kernel\":\"{}\",\"gflops\":{gflops:.3},\"ms\":{ms:.4},\"adapter\":\"{}\"}}",
+                    c.op, c.shape, c.kernel, adapter.replace('"', "'")
+                ));
+            } else {
+                println!("{:<17} {:<34} {:<16} {:<9} {ms:>10.3} {gflops:>9.2}", c.op, c.shape, pass, c.kernel);
+            }
+        }
+        i = j;
+    }
+    if a.json {
+        println!("[\n  {}\n]", json.join(",\n  "));
+    }
+    Ok(())
+}
