@@ -6,6 +6,10 @@ use rendernet::bench::{self, Clock};
 use rendernet::ops::conv::{Conv, ConvKernel, Padding, Pass};
 use rendernet::ops::conv_transpose::ConvTranspose;
 use rendernet::ops::projection;
+use rendernet::graph::Executor;
+use rendernet::nn::rendernet::{Head, Preset, RenderNet, phong_of};
+use rendernet::ops::adam::Adam;
+use rendernet::reference::Light;
 use rendernet::{Gpu, Result, Tensor};
 
 /// Options of `rendernet bench`.
@@ -139,6 +143,52 @@ fn cases(gpu: &Gpu, choice: &str) -> Result<Vec<Case>> {
 }
 
 /// Runs the benchmark and prints a table or JSON.
+/// Whole-network entries: a RenderNet forward at full size and a training step on the
+/// largest patch of the schedule, with the executor's dispatch, submit and memory figures.
+/// Timed by wall clock around each submit and wait (the executor owns its encoder).
+fn model_rows(gpu: &Gpu, repeat: usize, json: bool, adapter: &str) -> Result<Vec<String>> {
+    let p = Preset::tiny();
+    let head = Head::Phong(phong_of(&Light::default()));
+    let mut rows = Vec::new();
+    for (pass, win, train) in [("forward", p.cam, false), ("train_step", p.cam / 2, true)] {
+        let net = RenderNet::build(&p, head, 1, [win, win], train)?;
+        let flops = net.graph.forward_flops() * if train { 3.0 } else { 1.0 };
+        let mut ex = Executor::new(gpu, net.graph.clone(), 0)?;
+        let step = |ex: &mut Executor| match net.loss {
+            Some(l) if train => ex.train_step(gpu, l, &Adam::new(0.0)),
+            _ => ex.forward(gpu),
+        };
+        let stats = step(&mut ex)?; // pipelines compile on first use
+        let mut ms = Vec::new();
+        for _ in 0..repeat.max(1) {
+            let t = std::time::Instant::now();
+            step(&mut ex)?;
+            ms.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+        let ms = bench::median(&ms);
+        let gflops = flops / (ms * 1e6);
+        let img = p.image_for(win);
+        let shape = format!("{} {}^3 grid, {img}x{img} image, batch 1", p.name, p.input);
+        rows.push(if json {
+            format!(
+                "{{\"op\":\"rendernet\",\"shape\":\"{shape}\",\"pass\":\"{pass}\",\"kernel\":\"auto\",\"gflops\":{gflops:.3},\"ms\":{ms:.2},\"adapter\":\"{}\",\"dispatches\":{},\"submits_per_step\":{},\"peak_bytes\":{},\"tensor_bytes\":{}}}",
+                adapter.replace('"', "'"),
+                stats.dispatches,
+                stats.submits,
+                stats.peak_bytes,
+                stats.tensor_bytes
+            )
+        } else {
+            format!(
+                "{:<17} {:<34} {:<16} {:<9} {ms:>10.1} {gflops:>9.2}  ({} dispatches, {} submit, peak {:.1} MiB of {:.1} MiB tensors)",
+                "rendernet", shape, pass, "auto", stats.dispatches, stats.submits,
+                stats.peak_bytes as f64 / 1048576.0, stats.tensor_bytes as f64 / 1048576.0
+            )
+        });
+    }
+    Ok(rows)
+}
+
 pub fn run(a: BenchArgs) -> Result<()> {
     let gpu = Gpu::new()?;
     let clock = bench::default_clock(&gpu);
@@ -188,6 +238,14 @@ pub fn run(a: BenchArgs) -> Result<()> {
             }
         }
         i = j;
+    }
+    if a.filter.as_deref().is_none_or(|f| "rendernet".contains(f)) {
+        let rows = model_rows(&gpu, a.repeat, a.json, &adapter)?;
+        if a.json {
+            json.extend(rows);
+        } else {
+            rows.iter().for_each(|r| println!("{r}"));
+        }
     }
     if a.json {
         println!("[\n  {}\n]", json.join(",\n  "));

@@ -88,7 +88,12 @@ pub fn run(a: TrainArgs) -> Result<()> {
         }
         Progress::Eval { step, psnr, checkpoint } => {
             last_psnr = format!("{psnr:.2}");
-            bar.println(format!("step {step}: held-out PSNR {psnr:.2} dB, checkpoint {}", checkpoint.display()));
+            let line = format!("step {step}: held-out PSNR {psnr:.2} dB, checkpoint {}", checkpoint.display());
+            if bar.is_hidden() {
+                println!("{line}");
+            } else {
+                bar.println(line);
+            }
         }
     })?;
     bar.finish();

@@ -117,6 +117,19 @@ impl Graph {
         (0..self.values.len()).map(Value).filter(|v| matches!(self.values[v.0].kind, Kind::Param(_))).collect()
     }
 
+    /// FLOPs (2 per multiply-add) of one forward pass, counting convolutions and the
+    /// projection; a training step costs about three times this.
+    pub fn forward_flops(&self) -> f64 {
+        let shape = |v: &Value| self.values[v.0].shape.as_slice();
+        self.nodes
+            .iter()
+            .map(|n| {
+                let ins: Vec<&[usize]> = n.inputs.iter().map(shape).collect();
+                2.0 * n.op.macs(&ins, shape(&n.output)) as f64
+            })
+            .sum()
+    }
+
     /// The nodes, in execution order.
     pub fn nodes(&self) -> &[Node] {
         &self.nodes

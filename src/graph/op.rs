@@ -135,6 +135,19 @@ impl Op {
         }
     }
 
+    /// Multiply-adds of the forward pass (convolutions and the projection; elementwise
+    /// ops are negligible next to them), for GFLOP/s figures.
+    pub(crate) fn macs(&self, ins: &[&[usize]], out: &[usize]) -> u64 {
+        let n = |s: &[usize]| s.iter().product::<usize>() as u64;
+        match self {
+            // y elements x (w elements / output channels): every output sums cin x taps.
+            Op::Conv(_) | Op::Projection => n(out) * n(&ins[1][1..]),
+            // Every input scatters into cout x taps outputs.
+            Op::ConvTranspose(_) => n(ins[0]) * n(&ins[1][1..]),
+            _ => 0,
+        }
+    }
+
     /// Whether input `j` can receive a gradient (a loss's target cannot).
     pub(crate) fn differentiable(&self, j: usize) -> bool {
         !matches!(self, Op::Loss(_)) || j == 0
