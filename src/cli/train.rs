@@ -48,6 +48,10 @@ pub struct TrainArgs {
     /// Held-out samples per evaluation (0 = all).
     #[arg(long, default_value_t = 50)]
     eval_samples: usize,
+    /// Train on a fixed camera-grid window (a multiple of 4, at most the grid side) instead of
+    /// the growing crop schedule; for fine-tuning a resumed checkpoint.
+    #[arg(long)]
+    crop: Option<usize>,
 }
 
 /// Runs training, drawing a progress bar with loss and images/s.
@@ -65,6 +69,7 @@ pub fn run(a: TrainArgs) -> Result<()> {
         seed: a.seed,
         eval_every: a.eval_every.max(1),
         eval_samples: a.eval_samples,
+        window: a.crop,
     };
     let gpu = Gpu::new()?;
     let bar = ProgressBar::new(cfg.steps);

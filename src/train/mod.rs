@@ -42,6 +42,8 @@ pub struct TrainConfig {
     pub eval_every: u64,
     /// Held-out samples per evaluation (0 = all).
     pub eval_samples: usize,
+    /// A fixed camera-grid window instead of the growing schedule (fine-tuning).
+    pub window: Option<usize>,
 }
 
 /// Reported to the caller (the CLI draws a progress bar from it).
@@ -112,14 +114,20 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
         let (_, meta) = crate::graph::params::load_safetensors(r)?;
         start = meta.get("step").and_then(|s| s.parse().ok()).unwrap_or(0);
     }
-    let mut cur = phase(gpu, cfg, head, window_at(p, start, cfg.steps), resume)?;
+    let window = |step: u64| cfg.window.unwrap_or_else(|| window_at(p, step, cfg.steps));
+    if let Some(w) = cfg.window {
+        if w == 0 || w % 4 != 0 || w > p.cam {
+            return Err(Error::Invalid(format!("--crop {w}: must be a multiple of 4 in 4..={}", p.cam)));
+        }
+    }
+    let mut cur = phase(gpu, cfg, head, window(start), resume)?;
     let names: Vec<String> = cur.net.targets.iter().map(|(n, _)| n.clone()).collect();
     let mut rng = cfg.seed ^ 0x5EED ^ start.wrapping_mul(0x2545F4914F6CDD1D);
     let mut curve = (Vec::new(), Vec::new());
     let mut psnr = f32::NAN;
     let t0 = std::time::Instant::now();
     for step in start..cfg.steps {
-        let w = window_at(p, step, cfg.steps);
+        let w = window(step);
         if w != cur.window {
             cur.ex.save_checkpoint(gpu, &cfg.out)?;
             cur = phase(gpu, cfg, head, w, Some(&cfg.out))?;
