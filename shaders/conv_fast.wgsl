@@ -51,25 +51,40 @@ fn lin(gid: vec3<u32>, nwg: vec3<u32>) -> u32 {
 // voxel v lands at v * stride and the voxels between are zero (a strided conv's backward
 // input is a stride-1 conv of its dilated dy). Params: n, ci = C, id/ih/iw source size,
 // od/oh/ow destination size, sd/sh/sw, cpad.
+// One invocation per destination voxel, writing its cpad channels as vec4s: the index
+// arithmetic (integer division is scalarised per lane on llvmpipe) is paid once per voxel.
 @group(0) @binding(1) var<storage, read> src: array<f32>;
-@group(0) @binding(2) var<storage, read_write> dst: array<f32>;
+@group(0) @binding(2) var<storage, read_write> dst: array<vec4<f32>>;
+
+// Channel c of source voxel s of batch item n, zero past the channel count or off-grid.
+fn src_at(n: u32, c: u32, s: u32, s_len: u32, ok: bool) -> f32 {
+    let v = src[(n * p.ci + min(c, p.ci - 1u)) * s_len + s];
+    return select(0.0, v, ok && c < p.ci);
+}
 
 @compute @workgroup_size(64)
 fn conv_fast_pack_input(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = lin(gid, nwg);
     if (i >= p.total) { return; }
-    var r = i;
-    let c = r % p.cpad; r /= p.cpad;
-    let w = r % p.ow; r /= p.ow;
-    let h = r % p.oh; r /= p.oh;
-    let d = r % p.od;
-    let n = r / p.od;
-    var v = 0.0;
-    let on_grid = w % p.sw == 0u && h % p.sh == 0u && d % p.sd == 0u;
-    if (c < p.ci && on_grid && d / p.sd < p.id && h / p.sh < p.ih && w / p.sw < p.iw) {
-        v = src[(((n * p.ci + c) * p.id + d / p.sd) * p.ih + h / p.sh) * p.iw + w / p.sw];
+    let dst_len = p.od * p.oh * p.ow;
+    let s_len = p.id * p.ih * p.iw;
+    let n = i / dst_len;
+    var s = i % dst_len;
+    var ok = true;
+    if (p.sd * p.sh * p.sw != 1u) {
+        let w = s % p.ow;
+        let h = (s / p.ow) % p.oh;
+        let d = s / (p.ow * p.oh);
+        ok = w % p.sw == 0u && h % p.sh == 0u && d % p.sd == 0u;
+        ok = ok && d / p.sd < p.id && h / p.sh < p.ih && w / p.sw < p.iw;
+        s = select(0u, ((d / p.sd) * p.ih + h / p.sh) * p.iw + w / p.sw, ok);
     }
-    dst[i] = v;
+    let cq = p.cpad / 4u;
+    for (var q = 0u; q < cq; q++) {
+        let c = 4u * q;
+        dst[i * cq + q] = vec4<f32>(src_at(n, c, s, s_len, ok), src_at(n, c + 1u, s, s_len, ok),
+                                    src_at(n, c + 2u, s, s_len, ok), src_at(n, c + 3u, s, s_len, ok));
+    }
 }
 
 // ---- packing: weights -> [tap][cpad][co16 * 16] ---------------------------------------------

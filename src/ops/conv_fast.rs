@@ -81,7 +81,7 @@ fn pack_input(
     let u = |a: [usize; 3]| a.map(|v| v as u32);
     let ([id, ih, iw], [od, oh, ow], [sd, sh, sw]) = (u(src), u(dst), u(stride));
     let p = Params { n: n as u32, ci: c as u32, id, ih, iw, od, oh, ow, sd, sh, sw, cpad: cpad as u32, ..Default::default() };
-    dispatch(gpu, pass, "conv_fast_pack_input", p, &[Arg::R(t), Arg::W(&out)], out.numel())?;
+    dispatch(gpu, pass, "conv_fast_pack_input", p, &[Arg::R(t), Arg::W(&out)], n * volume(dst))?;
     Ok(out)
 }
 
