@@ -36,14 +36,16 @@ pub fn run(a: EvalArgs) -> Result<()> {
     if a.json {
         let shapes: Vec<String> = r.per_shape.iter().map(|(k, v)| format!("\"{k}\":{v:.3}")).collect();
         println!(
-            "{{\"psnr_mean\":{:.3},\"psnr_ci95\":{:.3},\"samples\":{},\"per_shape\":{{{}}}}}",
+            "{{\"psnr_mean\":{:.3},\"psnr_ci95\":{:.3},\"black_image_psnr\":{:.3},\"samples\":{},\"per_shape\":{{{}}}}}",
             r.mean,
             r.ci95,
+            r.black,
             r.count,
             shapes.join(",")
         );
     } else {
         println!("held-out PSNR {:.2} dB ± {:.2} (95%), {} samples, {} shapes", r.mean, r.ci95, r.count, r.per_shape.len());
+        println!("an all-black image scores {:.2} dB on the same samples (the background's share)", r.black);
         for (k, v) in &r.per_shape {
             println!("  shape {k}: {v:.2} dB");
         }

@@ -21,6 +21,10 @@ pub struct EvalReport {
     pub count: usize,
     /// Mean PSNR per shape id.
     pub per_shape: BTreeMap<u32, f32>,
+    /// Mean PSNR an all-black image would score on the same samples: with small objects on
+    /// a black background PSNR is dominated by the background, so this is the floor to
+    /// compare against.
+    pub black: f32,
 }
 
 /// Renders up to `limit` held-out samples (0 = all) with the weights at `weights` and
@@ -38,6 +42,7 @@ pub fn evaluate(gpu: &Gpu, p: &Preset, head: Head, weights: &Path, ds: &Dataset,
         Head::Image(_) => "image",
     };
     let mut psnrs = Vec::with_capacity(n);
+    let mut black = 0.0f32;
     let mut shapes: BTreeMap<u32, Vec<f32>> = BTreeMap::new();
     // Spread the evaluated samples over the split so every shape is represented.
     for k in 0..n {
@@ -57,6 +62,8 @@ pub fn evaluate(gpu: &Gpu, p: &Preset, head: Head, weights: &Path, ds: &Dataset,
         let mse = y.iter().zip(t).map(|(a, b)| (a.clamp(0.0, 1.0) - b) as f64).map(|d| d * d).sum::<f64>() / t.len() as f64;
         let db = psnr_from_mse(mse as f32, 1.0).min(99.0);
         psnrs.push(db);
+        let mse0 = t.iter().map(|&b| (b as f64) * (b as f64)).sum::<f64>() / t.len() as f64;
+        black += psnr_from_mse(mse0 as f32, 1.0).min(99.0);
         shapes.entry(s.shape_id).or_default().push(db);
     }
     let count = psnrs.len().max(1);
@@ -66,6 +73,7 @@ pub fn evaluate(gpu: &Gpu, p: &Preset, head: Head, weights: &Path, ds: &Dataset,
         mean,
         ci95: 1.96 * (var / count as f32).sqrt(),
         count: psnrs.len(),
+        black: black / count as f32,
         per_shape: shapes.into_iter().map(|(k, v)| (k, v.iter().sum::<f32>() / v.len() as f32)).collect(),
     })
 }
