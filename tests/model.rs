@@ -69,12 +69,13 @@ fn shipped_weights_render_an_unseen_shape_close_to_the_reference() {
     let truth = reference::Renderer::new(&gpu).render(&gpu, &grid, &view, &light, Shader::Phong, 128).unwrap();
     let mse = img.data.iter().zip(&truth.data).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / img.data.len() as f64;
     let psnr = -10.0 * mse.log10();
-    // The black image scores BLACK_DB here; the trained weights must do far better.
+    // The black image is the floor: a network that learned nothing scores about that.
     let black = -10.0 * (truth.data.iter().map(|&b| (b as f64).powi(2)).sum::<f64>() / truth.data.len() as f64).log10();
     eprintln!("PSNR {psnr:.2} dB (black image: {black:.2} dB)");
     assert!(psnr > MIN_DB, "shipped weights render at {psnr:.2} dB, expected > {MIN_DB} (black image: {black:.2})");
 }
 
-/// Set from the shipped weights' measured PSNR on this view, minus a margin for
-/// driver-to-driver float differences.
-const MIN_DB: f64 = 0.0;
+/// The shipped weights measured 19.4 dB on this view (black image: 12.9 dB) on lavapipe; the
+/// margin absorbs driver-to-driver float differences, while a broken kernel or a mis-loaded
+/// weight lands near the black image's score.
+const MIN_DB: f64 = 17.0;
