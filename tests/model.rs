@@ -51,6 +51,11 @@ fn dataset_train_resume_and_eval_from_the_command_line() {
     }
     let out = rendernet(&[&["train", "--steps", "4", "--resume", c][..], &common[..]].concat());
     assert!(out.contains("final held-out PSNR"), "{out}");
+    // The log spans the interruption: losses of steps 1..=4 and evaluations at 2 and 4.
+    let log = std::fs::read_to_string(ckpt.with_extension("log.csv")).unwrap();
+    let losses = log.lines().filter(|l| l.ends_with(',')).count();
+    assert_eq!(losses, 4, "{log}");
+    assert!(log.contains("\n2,,") && log.contains("\n4,,"), "{log}");
     let w = ckpt.with_extension("weights.safetensors");
     let out = rendernet(&["eval", "--weights", w.to_str().unwrap(), "--data", d, "--json"]);
     assert!(out.contains("\"psnr_mean\"") && out.contains("\"per_shape\""), "{out}");

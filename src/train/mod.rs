@@ -123,7 +123,11 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
     let mut cur = phase(gpu, cfg, head, window(start), resume)?;
     let names: Vec<String> = cur.net.targets.iter().map(|(n, _)| n.clone()).collect();
     let mut rng = cfg.seed ^ 0x5EED ^ start.wrapping_mul(0x2545F4914F6CDD1D);
-    let mut curve = (Vec::new(), Vec::new());
+    // The curve lives in <out>.log.csv (step,loss,psnr), appended every evaluation and read
+    // back on resume, so the PNG covers the whole run across interruptions.
+    let log = cfg.out.with_extension("log.csv");
+    let mut curve = if resume.is_some() { plot::read_log(&log, start) } else { (Vec::new(), Vec::new()) };
+    let mut pending: Vec<(u64, f32)> = Vec::new();
     let mut psnr = f32::NAN;
     let t0 = std::time::Instant::now();
     for step in start..cfg.steps {
@@ -147,7 +151,7 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
         if !loss.is_finite() {
             return Err(Error::Invalid(format!("step {step}: the loss is {loss}; stopping before the weights go bad (last checkpoint: {})", cfg.out.display())));
         }
-        curve.0.push((step + 1, loss));
+        pending.push((step + 1, loss));
         let ips = cfg.batch as f32 / ts.elapsed().as_secs_f32();
         report(Progress::Step { step: step + 1, loss, lr, window: w, images_per_s: ips });
         let last = step + 1 == cfg.steps;
@@ -156,6 +160,8 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
             let params = cfg.out.with_extension("weights.safetensors");
             cur.ex.save_params(gpu, &params)?;
             psnr = eval::evaluate(gpu, p, head, &params, &ds, cfg.eval_samples)?.mean;
+            plot::append_log(&log, &pending, (step + 1, psnr))?;
+            curve.0.append(&mut pending);
             curve.1.push((step + 1, psnr));
             let _ = plot::write_curve(&cfg.out.with_extension("curve.png"), &curve.0, &curve.1);
             report(Progress::Eval { step: step + 1, psnr, checkpoint: cfg.out.clone() });
