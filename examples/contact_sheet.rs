@@ -1,25 +1,29 @@
-//! Renders a procedural chair with every reference shader, the way a dependent crate would
-//! use the library, and writes one PNG per shader.
+//! Voxelises a mesh file (OBJ, OFF or PLY; default: a procedural chair) and renders it with
+//! every reference shader into one contact-sheet PNG, the way a dependent crate would.
 //!
-//! `cargo run --example contact_sheet -- [OUT_DIR] [SEED]`
+//! `cargo run --example contact_sheet -- [MESH] [OUT.png]`
 
-use rendernet::reference::{Light, Renderer, Shader, View};
-use rendernet::voxel::shapes;
 use rendernet::Gpu;
+use rendernet::reference::{Light, Renderer, Shader, View};
+use rendernet::voxel::{self, Mesh, VoxelizeOptions, shapes};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
-    let out = std::path::PathBuf::from(args.next().unwrap_or_else(|| "contact-sheet".into()));
-    let seed: u64 = args.next().map(|s| s.parse()).transpose()?.unwrap_or(0);
-    std::fs::create_dir_all(&out)?;
+    let grid = match args.next() {
+        Some(path) => voxel::voxelize(&Mesh::load(&path)?, &VoxelizeOptions { resolution: 64, ..Default::default() })?,
+        None => shapes::chair(0).to_grid(64)?,
+    };
+    let out = args.next().unwrap_or_else(|| "contact-sheet.png".into());
     let gpu = Gpu::new()?;
-    let grid = shapes::chair(seed).to_grid(64)?;
     let renderer = Renderer::new(&gpu);
-    for shader in Shader::ALL {
-        let img = renderer.render(&gpu, &grid, &View::default(), &Light::default(), shader, 128)?;
-        let path = out.join(format!("chair{seed}-{}.png", shader.name()));
-        img.save_png(&path)?;
-        println!("wrote {}", path.display());
+    let s = 128u32;
+    let mut sheet = image::RgbImage::new(s * Shader::ALL.len() as u32, s);
+    for (i, shader) in Shader::ALL.into_iter().enumerate() {
+        let img = renderer.render(&gpu, &grid, &View::default(), &Light::default(), shader, s)?;
+        image::imageops::replace(&mut sheet, &img.to_rgb8(), (i as u32 * s) as i64, 0);
     }
+    sheet.save(&out)?;
+    let names: Vec<&str> = Shader::ALL.iter().map(|s| s.name()).collect();
+    println!("wrote {out}: {}", names.join(", "));
     Ok(())
 }
