@@ -288,6 +288,24 @@ fn fast_conv2d_and_transposed_forward_and_gradients() {
     check_fast(transposed3d([3, 2, 3], [1, 2, 2], explicit([1, 0, 2], [0, 1, 1]), None), 56);
 }
 
+/// The tiled kernels at channel counts that are not multiples of their tile (inputs padded to
+/// 4, outputs to 16 with zeros): 1, 2, 3, 5 in and 1, 3, 5 out, conv and transposed, including
+/// the first layer's shape (3D, 1 input channel, 5^3 stride 2) and the 1- and 3-channel heads.
+#[test]
+fn fast_small_channel_counts_forward_and_gradients() {
+    let with = |c: Case, ci: usize, co: usize| Case { ci, co, ..c };
+    check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 1, 3), 60);
+    check_fast(with(conv3d([3, 3, 3], [2, 1, 1], Padding::Same), 2, 1), 61);
+    check_fast(with(conv3d([3, 2, 3], [1, 2, 1], explicit([1, 0, 2], [0, 1, 1])), 5, 5), 62);
+    check_fast(with(conv2d([3, 3], [1, 1], Padding::Same), 3, 1), 63);
+    check_fast(with(conv2d([3, 3], [1, 1], Padding::Same), 5, 3), 64);
+    check_fast(with(conv2d([4, 3], [2, 1], Padding::explicit_2d([2, 0], [1, 1])), 1, 5), 65);
+    check_fast(with(transposed2d([4, 4], [2, 2], Padding::Same, None), 2, 3), 66);
+    check_fast(with(transposed2d([3, 3], [2, 2], Padding::explicit_2d([1, 1], [1, 1]), Some([1, 8, 10])), 5, 1), 67);
+    check_fast(with(transposed3d([4, 4, 4], [2, 2, 2], Padding::Same, None), 1, 5), 68);
+    check_fast(with(transposed3d([3, 2, 3], [1, 2, 2], explicit([1, 0, 2], [0, 1, 1]), None), 3, 3), 69);
+}
+
 /// Runs all three passes of `c` with `kernel` on fixed random inputs; returns (y, dx, dw).
 fn passes(c: &Case, kernel: ConvKernel, seed: u64) -> [Vec<f64>; 3] {
     let g = geom(c);

@@ -39,6 +39,9 @@ struct Params {
     nchunks: u32, chunk: u32,
     // Invocations that do work.
     total: u32,
+    // Taps folded into the channel axis (1: none; see conv_fast_pack_folded): weight packing
+    // and conv_fast_weight_sum map folded channel c' = c * fold + f back to channel c, tap f.
+    fold: u32,
 }
 @group(0) @binding(0) var<uniform> p: Params;
 
@@ -87,9 +90,49 @@ fn conv_fast_pack_input(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(
     }
 }
 
+// ---- packing with folded taps: [N, C, id, ih, iw] -> [N, id, oh', ow', cpad] -------------
+// For few input channels (the 1-channel first layer) the channel quads are mostly zero
+// padding; folding the kernel's W taps (or H and W taps) into the channel axis, im2col-style
+// along those axes only, fills them: folded channel c' = (c * kh + a) * kw + b holds
+// x[c, h'*sh - ph + a, w'*sw - pw + b], and the conv left is the one with kernel 1, stride 1
+// and no padding on the folded axes (src/ops/conv_fast.rs builds its geometry). Params: n,
+// ci = C, id/ih/iw source, od/oh/ow destination (od = id), kh/kw fold sizes, sh/sw and
+// ph/pw the folded axes' stride and padding (1 and 0 with fold size 1: the axis is copied).
+fn folded_at(n: u32, c: u32, d: u32, h0: i32, w0: i32) -> f32 {
+    let f = p.kh * p.kw;
+    let b = c % f;
+    let h = h0 + i32(b / p.kw);
+    let w = w0 + i32(b % p.kw);
+    let ok = c < p.ci * f && h >= 0 && h < i32(p.ih) && w >= 0 && w < i32(p.iw);
+    let hc = u32(clamp(h, 0, i32(p.ih) - 1));
+    let wc = u32(clamp(w, 0, i32(p.iw) - 1));
+    let v = src[(((n * p.ci + min(c / f, p.ci - 1u)) * p.id + d) * p.ih + hc) * p.iw + wc];
+    return select(0.0, v, ok);
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_pack_folded(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = lin(gid, nwg);
+    if (i >= p.total) { return; }
+    let dst_len = p.od * p.oh * p.ow;
+    let n = i / dst_len;
+    let s = i % dst_len;
+    let w0 = i32((s % p.ow) * p.sw) - i32(p.pw);
+    let h0 = i32(((s / p.ow) % p.oh) * p.sh) - i32(p.ph);
+    let d = s / (p.ow * p.oh);
+    let cq = p.cpad / 4u;
+    for (var q = 0u; q < cq; q++) {
+        let c = 4u * q;
+        dst[i * cq + q] = vec4<f32>(folded_at(n, c, d, h0, w0), folded_at(n, c + 1u, d, h0, w0),
+                                    folded_at(n, c + 2u, d, h0, w0), folded_at(n, c + 3u, d, h0, w0));
+    }
+}
+
 // ---- packing: weights -> [tap][cpad][co16 * 16] ---------------------------------------------
 // Source layout [co][ci][taps] (flip = 0) or, for backward input, the forward conv's
 // [ci][co][taps] read with the tap order reversed (flip = 1), ci/co being this dispatch's.
+// With fold > 1 (flip = 0 only) channel c is folded channel c / fold's tap c % fold, taps
+// being the unfolded ones: the folded axes are the innermost of a tap's index.
 @group(0) @binding(1) var<storage, read> wsrc: array<f32>;
 @group(0) @binding(2) var<storage, read_write> wdst: array<f32>;
 
@@ -106,7 +149,8 @@ fn conv_fast_pack_weights(@builtin(global_invocation_id) gid: vec3<u32>, @builti
     var v = 0.0;
     if (o < p.co && c < p.ci) {
         if (p.flip == 0u) {
-            v = wsrc[(o * p.ci + c) * taps + tap];
+            let f = max(p.fold, 1u);
+            v = wsrc[(o * (p.ci / f) + c / f) * taps * f + tap * f + c % f];
         } else {
             v = wsrc[(c * p.co + o) * taps + (taps - 1u - tap)];
         }
@@ -336,10 +380,14 @@ fn conv_fast_backward_weight(@builtin(global_invocation_id) gid: vec3<u32>, @bui
 fn conv_fast_weight_sum(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = lin(gid, nwg);
     if (i >= p.total) { return; }
+    // Output index over the unfolded [co][ci / fold][taps * fold]; part is over folded taps.
     let taps = p.kd * p.kh * p.kw;
-    let tap = i % taps;
-    let c = (i / taps) % p.ci;
+    let f = max(p.fold, 1u);
+    let tap0 = i % (taps * f);
+    let c0 = (i / (taps * f)) % (p.ci / f);
     let o = i / (taps * p.ci);
+    let tap = tap0 / f;
+    let c = c0 * f + tap0 % f;
     let copad = p.co16 * 16u;
     let stride = taps * p.cpad * copad;
     var acc = 0.0;

@@ -38,6 +38,7 @@ struct Params {
     nchunks: u32,
     chunk: u32,
     total: u32,
+    fold: u32,
 }
 
 fn params(g: &Geometry, cpad: usize) -> Params {
@@ -54,6 +55,7 @@ fn params(g: &Geometry, cpad: usize) -> Params {
         id, ih, iw, od, oh, ow, kd, kh, kw, sd, sh, sw, pd, ph, pw,
         cpad: u(cpad),
         co16: u(g.co.div_ceil(16)),
+        fold: 1,
         ..Default::default()
     }
 }
@@ -85,13 +87,78 @@ fn pack_input(
     Ok(out)
 }
 
+/// A conv with its innermost kernel axes folded into the input channels (see
+/// `conv_fast_pack_folded`): the geometry the kernels run, and the fold sizes along H and W.
+struct Folded {
+    g: Geometry,
+    fh: usize,
+    fw: usize,
+}
+
+impl Folded {
+    /// Taps per folded channel group.
+    fn fold(&self) -> usize {
+        self.fh * self.fw
+    }
+}
+
+/// The fold of `g`'s W taps, or H and W taps, or none: whichever needs the fewest (tap,
+/// channel group) iterations with channels padded to a multiple of `quantum` (4 for the
+/// forward tile, 8 for the weight-gradient tile), the smaller fold on a tie. Only convs with
+/// few input channels gain; the others keep `fh = fw = 1`.
+fn fold(g: &Geometry, quantum: usize) -> Folded {
+    let [kd, kh, kw] = g.kernel;
+    let cost = |f: usize, taps: usize| taps * (g.ci * f).div_ceil(quantum);
+    let (fh, fw) = [(1, 1), (1, kw), (kh, kw)].into_iter().min_by_key(|&(fh, fw)| cost(fh * fw, kd * (kh / fh) * (kw / fw))).unwrap();
+    // Per folded axis: the folded value, else the conv's own.
+    let on = |f: usize, folded: usize, plain: usize| if f > 1 { folded } else { plain };
+    let g = Geometry {
+        ci: g.ci * fh * fw,
+        input: [g.input[0], on(fh, g.output[1], g.input[1]), on(fw, g.output[2], g.input[2])],
+        kernel: [kd, on(fh, 1, kh), on(fw, 1, kw)],
+        stride: [g.stride[0], on(fh, 1, g.stride[1]), on(fw, 1, g.stride[2])],
+        pad: [g.pad[0], on(fh, 0, g.pad[1]), on(fw, 0, g.pad[2])],
+        ..*g
+    };
+    Folded { g, fh, fw }
+}
+
+/// `x` ([N, C, input...] of the unfolded `g`) packed for the folded conv `f`, channels-last
+/// with `cpad` channels (see `conv_fast_pack_folded`); without a fold, a plain packing.
+fn pack_folded(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded, x: &Tensor, cpad: usize) -> Result<Tensor> {
+    if f.fold() == 1 {
+        return pack_input(gpu, pass, x, g.n, g.ci, g.input, g.input, [1; 3], cpad);
+    }
+    let out = Tensor::zeros(gpu, &[g.n, volume(f.g.input), cpad])?;
+    let u = |v: usize| v as u32;
+    let [id, ih, iw] = g.input.map(u);
+    let [od, oh, ow] = f.g.input.map(u);
+    // Along an unfolded axis: fold size 1, stride 1, no padding (a copy).
+    let (sh, ph) = if f.fh > 1 { (u(g.stride[1]), u(g.pad[1])) } else { (1, 0) };
+    let (sw, pw) = if f.fw > 1 { (u(g.stride[2]), u(g.pad[2])) } else { (1, 0) };
+    let (kh, kw) = (u(f.fh), u(f.fw));
+    let p = Params { n: u(g.n), ci: u(g.ci), id, ih, iw, od, oh, ow, kh, kw, sh, sw, ph, pw, cpad: u(cpad), ..Default::default() };
+    dispatch(gpu, pass, "conv_fast_pack_folded", p, &[Arg::R(x), Arg::W(&out)], g.n * volume(f.g.input))?;
+    Ok(out)
+}
+
 /// Weights repacked as [tap][cpad][co16 * 16] for the dispatch geometry `g`; `flip` reads a
-/// forward conv's weights as those of its stride-1 backward-input conv.
-fn pack_weights(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, w: &Tensor, cpad: usize, flip: bool) -> Result<Tensor> {
+/// forward conv's weights as those of its stride-1 backward-input conv; `fold` > 1 reads
+/// them for `g` being a folded conv (see [`fold`]).
+#[allow(clippy::too_many_arguments)]
+fn pack_weights(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    w: &Tensor,
+    cpad: usize,
+    flip: bool,
+    fold: usize,
+) -> Result<Tensor> {
     let taps: usize = g.kernel.iter().product();
     let copad = g.co.div_ceil(16) * 16;
     let out = Tensor::zeros(gpu, &[taps, cpad, copad])?;
-    let p = Params { flip: flip as u32, ..params(g, cpad) };
+    let p = Params { flip: flip as u32, fold: fold as u32, ..params(g, cpad) };
     dispatch(gpu, pass, "conv_fast_pack_weights", p, &[Arg::R(w), Arg::W(&out)], out.numel())?;
     Ok(out)
 }
@@ -100,33 +167,28 @@ fn volume(s: [usize; 3]) -> usize {
     s.iter().product()
 }
 
-/// The tiled forward of dispatch geometry `g`: packs `x` (of spatial size `src`, dilated by
-/// `dilate` into `g.input`) and `w` (`flip` as in [`pack_weights`]), then one invocation per
-/// 8 outputs along W x 16 output channels.
+/// The tiled forward of dispatch geometry `g` on packed operands: one invocation per 8
+/// outputs along W x 16 output channels.
 #[allow(clippy::too_many_arguments)]
 fn forward_packed(
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
     g: &Geometry,
-    x: &Tensor,
-    src: [usize; 3],
-    dilate: [usize; 3],
-    w: &Tensor,
-    flip: bool,
+    xp: &Tensor,
+    wp: &Tensor,
+    cpad: usize,
     b: Option<&Tensor>,
     y: &Tensor,
 ) -> Result<()> {
-    let cpad = g.ci.div_ceil(4) * 4;
-    let xp = pack_input(gpu, pass, x, g.n, g.ci, src, g.input, dilate, cpad)?;
-    let wp = pack_weights(gpu, pass, g, w, cpad, flip)?;
     let [od, oh, ow] = g.output;
     let tiles = g.n * g.co.div_ceil(16) * od * oh * ow.div_ceil(8);
     let p = Params { has_bias: b.is_some() as u32, ..params(g, cpad) };
     let bias = b.map_or(Arg::Absent, Arg::R);
-    dispatch(gpu, pass, "conv_fast_forward", p, &[Arg::R(&xp), Arg::R(&wp), bias, Arg::W(y)], tiles)
+    dispatch(gpu, pass, "conv_fast_forward", p, &[Arg::R(xp), Arg::R(wp), bias, Arg::W(y)], tiles)
 }
 
-/// Tiled `y = conv(x, w) + b` (any stride and padding).
+/// Tiled `y = conv(x, w) + b` (any stride and padding), with taps folded into channels
+/// where that fills the channel quads better (few input channels).
 pub(crate) fn forward(
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
@@ -136,7 +198,11 @@ pub(crate) fn forward(
     b: Option<&Tensor>,
     y: &Tensor,
 ) -> Result<()> {
-    forward_packed(gpu, pass, g, x, g.input, [1; 3], w, false, b, y)
+    let f = fold(g, 4);
+    let cpad = f.g.ci.div_ceil(4) * 4;
+    let xp = pack_folded(gpu, pass, g, &f, x, cpad)?;
+    let wp = pack_weights(gpu, pass, &f.g, w, cpad, false, f.fold())?;
+    forward_packed(gpu, pass, &f.g, &xp, &wp, cpad, b, y)
 }
 
 /// Whether [`backward_input`] handles `g`: padding before of at most `k - 1` on every axis
@@ -165,7 +231,10 @@ pub(crate) fn backward_input(
         pad: [0, 1, 2].map(|a| g.kernel[a] - 1 - g.pad[a]),
         ..*g
     };
-    forward_packed(gpu, pass, &t, dy, g.output, g.stride, w, true, b, dx)
+    let cpad = t.ci.div_ceil(4) * 4;
+    let dyp = pack_input(gpu, pass, dy, t.n, t.ci, g.output, t.input, g.stride, cpad)?;
+    let wp = pack_weights(gpu, pass, &t, w, cpad, true, 1)?;
+    forward_packed(gpu, pass, &t, &dyp, &wp, cpad, b, dx)
 }
 
 /// Tiled `dw[co, ci, k] = Σ dy[n, co, o] x[n, ci, o*s - pad + k]`: partial sums per chunk of
@@ -178,8 +247,10 @@ pub(crate) fn backward_weight(
     dy: &Tensor,
     dw: &Tensor,
 ) -> Result<()> {
-    let (cpad, copad) = (g.ci.div_ceil(8) * 8, g.co.div_ceil(16) * 16);
-    let xp = pack_input(gpu, pass, x, g.n, g.ci, g.input, g.input, [1; 3], cpad)?;
+    let f = fold(g, 8);
+    let (cpad, copad) = (f.g.ci.div_ceil(8) * 8, g.co.div_ceil(16) * 16);
+    let xp = pack_folded(gpu, pass, g, &f, x, cpad)?;
+    let g = &f.g;
     let dyp = pack_input(gpu, pass, dy, g.n, g.co, g.output, g.output, [1; 3], copad)?;
     let taps = volume(g.kernel);
     let columns = taps * (cpad / 8) * (copad / 16);
@@ -192,7 +263,7 @@ pub(crate) fn backward_weight(
     let chunk = rows.div_ceil(nchunks);
     let nchunks = rows.div_ceil(chunk);
     let part = Tensor::zeros(gpu, &[nchunks, taps, cpad, copad])?;
-    let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, ..params(g, cpad) };
+    let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, ..params(g, cpad) };
     dispatch(gpu, pass, "conv_fast_backward_weight", p, &[Arg::R(&xp), Arg::R(&dyp), Arg::W(&part)], nchunks * columns)?;
     dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
 }
