@@ -4,7 +4,6 @@
 //! and mask maps and shades them with the input light (Section 3.3); other shaders use a
 //! direct image head. Widths, depths and sizes come from a [`Preset`].
 
-use super::camera;
 use crate::error::{Error, Result};
 use crate::graph::{Graph, Init, Op, Value};
 use crate::ops::conv::{Conv, Padding};
@@ -238,9 +237,4 @@ impl RenderNet {
         }
         Ok(RenderNet { graph: g, grid, pose, light, image, maps, targets, loss })
     }
-}
-
-/// Feeds helper: the pose and light rows for one sample.
-pub fn sample_inputs(p: &Preset, view: &crate::reference::View, light: &Light, cam_hw: usize, crop: Option<[usize; 4]>) -> ([f32; 6], [f32; 6]) {
-    (camera::pose_for_view(view, p.input, cam_hw, crop), camera::light_values(light))
 }
