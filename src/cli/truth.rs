@@ -121,8 +121,8 @@ pub fn load(a: &SceneArgs) -> Result<(VoxelGrid, String)> {
         "safetensors" => voxel::safetensors_io::read(path).map_err(voxel_err)?,
         "obj" | "off" | "ply" => {
             let mesh = Mesh::load(path).map_err(voxel_err)?;
-            let opts = VoxelizeOptions { resolution: a.resolution, ..Default::default() };
-            voxel::voxelize(&mesh, &opts).map_err(voxel_err)?
+            // Anti-aliased: binary occupancy renders as voxel stair-steps (rings, false creases).
+            voxel::voxelize(&mesh, &VoxelizeOptions::smooth(a.resolution)).map_err(voxel_err)?
         }
         _ => {
             return Err(Error::Invalid(format!(
