@@ -99,8 +99,10 @@ fn voxel_err(e: voxel::VoxelError) -> Error {
     Error::Invalid(e.to_string())
 }
 
-/// `datasets/fixtures/bunny64.binvox`, the default scene of `truth` and `render`.
-pub const BUNNY: &[u8] = include_bytes!("../../datasets/fixtures/bunny64.binvox");
+/// `datasets/fixtures/bunny64.safetensors`, the default scene of `truth` and `render`: the
+/// bunny voxelised anti-aliased (`VoxelizeOptions::smooth(64)`, u8 occupancy), so its
+/// iso-surface is smooth rather than a binvox staircase.
+pub const BUNNY: &[u8] = include_bytes!("../../datasets/fixtures/bunny64.safetensors");
 
 /// Loads the grid the flags name, and says what it is.
 pub fn load(a: &SceneArgs) -> Result<(VoxelGrid, String)> {
@@ -112,7 +114,7 @@ pub fn load(a: &SceneArgs) -> Result<(VoxelGrid, String)> {
         }
         // The embedded default: the Stanford bunny (public domain, npm `bunny`) voxelised at
         // 64^3, a shape no training set of ours contains.
-        let grid = Binvox::parse(BUNNY, "embedded bunny64.binvox").map_err(voxel_err)?.grid;
+        let grid = voxel::safetensors_io::from_bytes(BUNNY, "embedded bunny64.safetensors").map_err(voxel_err)?;
         return Ok((grid, "the embedded Stanford bunny at 64^3".into()));
     };
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();

@@ -75,6 +75,15 @@ fn safetensors_round_trip_and_validation() {
         safetensors_io::write(&g, &path).unwrap();
         assert_eq!(safetensors_io::read(&path).unwrap(), g);
     }
+    // u8 occupancy (the fixtures' form): exact for 0/1, within 1/510 for fractions.
+    let frac = VoxelGrid::new([3, 4, 5], (0..60).map(|i| i as f32 / 59.0).collect()).unwrap();
+    let bytes = safetensors_io::to_bytes_u8(&frac).unwrap();
+    assert!(bytes.len() < safetensors_io::to_bytes(&frac).unwrap().len());
+    let back = safetensors_io::from_bytes(&bytes, "u8.safetensors").unwrap();
+    assert_eq!(back.dims(), [3, 4, 5]);
+    assert!(back.occupancy().iter().zip(frac.occupancy()).all(|(a, b)| (a - b).abs() <= 1.0 / 510.0 + 1e-7));
+    let binary = pattern_grid(dims);
+    assert_eq!(safetensors_io::from_bytes(&safetensors_io::to_bytes_u8(&binary).unwrap(), "b").unwrap(), binary);
 
     use safetensors::{Dtype, tensor::TensorView};
     let encode = |tensors: Vec<(&str, Dtype, Vec<usize>)>| {
