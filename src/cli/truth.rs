@@ -10,7 +10,7 @@ use std::time::Instant;
 /// What to render and from where: shared by `truth` and `render`.
 #[derive(Args, Debug)]
 pub struct SceneArgs {
-    /// Voxel grid (.binvox, .safetensors) or mesh (.obj, .off, .ply, voxelised at --resolution).
+    /// Voxel grid (.binvox, .safetensors, MagicaVoxel .vox) or mesh (.obj, .off, .ply, voxelised at --resolution).
     #[arg(long, value_name = "PATH", conflicts_with = "shape")]
     voxels: Option<PathBuf>,
     /// Grid side used to voxelise a mesh or a procedural --shape.
@@ -121,6 +121,7 @@ pub fn load(a: &SceneArgs) -> Result<(VoxelGrid, String)> {
     let grid = match ext.as_str() {
         "binvox" => Binvox::read(path).map_err(voxel_err)?.grid,
         "safetensors" => voxel::safetensors_io::read(path).map_err(voxel_err)?,
+        "vox" => voxel::vox::read(path).map_err(voxel_err)?,
         "obj" | "off" | "ply" => {
             let mesh = Mesh::load(path).map_err(voxel_err)?;
             // Anti-aliased: binary occupancy renders as voxel stair-steps (rings, false creases).
@@ -128,7 +129,7 @@ pub fn load(a: &SceneArgs) -> Result<(VoxelGrid, String)> {
         }
         _ => {
             return Err(Error::Invalid(format!(
-                "{}: unknown extension; expected .binvox, .safetensors, .obj, .off or .ply",
+                "{}: unknown extension; expected .binvox, .safetensors, .vox, .obj, .off or .ply",
                 path.display()
             )));
         }

@@ -143,7 +143,48 @@ pub fn voxelize(mesh: &Mesh, opts: &VoxelizeOptions) -> Result<VoxelGrid, VoxelE
         return VoxelGrid::new([n, n, n], box_downsample(&surface, None, n, k));
     }
     let solid = fill_from_outside(&surface, [n * k; 3]);
-    VoxelGrid::new([n, n, n], box_downsample(&solid, Some(&surface), n, k))
+    let mut occ = box_downsample(&solid, Some(&surface), n, k);
+    if k > 1 {
+        keep_thin_parts(&mut occ, n);
+    }
+    VoxelGrid::new([n, n, n], occ)
+}
+
+/// Occupancy [`keep_thin_parts`] raises thin-part voxels to: their iso-surface then sits
+/// about 0.3 voxel from the voxel centre, so a part thinner than a voxel renders about half
+/// a voxel thick instead of vanishing.
+pub const THIN_PART_OCCUPANCY: f32 = 0.7;
+
+/// Box filtering fades parts thinner than about a voxel (chair legs and slats at 64^3) below
+/// the renderer's 0.5 iso-level, so they vanish, where binvox's binary voxelisation would
+/// keep them. A partly filled voxel none of whose 6 neighbours reaches 0.5 is part of such a
+/// thin part (a surface voxel of a thick part has a neighbour inside it, >= 0.5); unless it
+/// is the faint halo of a fuller neighbour (less than half that neighbour's fraction), it is
+/// raised to [`THIN_PART_OCCUPANCY`], so slanted legs stay continuous.
+fn keep_thin_parts(occ: &mut [f32], n: usize) {
+    let src = occ.to_vec();
+    let at = |z: usize, y: usize, x: usize| src[(z * n + y) * n + x];
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let f = at(z, y, x);
+                if f <= 0.0 || f >= THIN_PART_OCCUPANCY {
+                    continue;
+                }
+                let mut nb = Vec::with_capacity(6);
+                if z > 0 { nb.push(at(z - 1, y, x)); }
+                if z + 1 < n { nb.push(at(z + 1, y, x)); }
+                if y > 0 { nb.push(at(z, y - 1, x)); }
+                if y + 1 < n { nb.push(at(z, y + 1, x)); }
+                if x > 0 { nb.push(at(z, y, x - 1)); }
+                if x + 1 < n { nb.push(at(z, y, x + 1)); }
+                let most = nb.iter().fold(0.0f32, |a, &v| a.max(v));
+                if most < 0.5 && f >= 0.5 * most {
+                    occ[(z * n + y) * n + x] = THIN_PART_OCCUPANCY;
+                }
+            }
+        }
+    }
 }
 
 /// The box filter from a `(k n)^3` cell grid to `n^3`: each voxel is the mean of its `k^3`
