@@ -9,7 +9,8 @@
 #           run `apt-get update` first if the package lists are empty). Skip them with
 #           NO_DEBIAN=1 on systems without apt.
 #
-# Then, with FIXTURES=1, re-voxelises the committed fixture datasets/fixtures/bunny64.binvox.
+# Then, with FIXTURES=1, re-voxelises the committed fixtures datasets/fixtures/bunny64.safetensors
+# (anti-aliased, the default scene) and bunny64.binvox (binary).
 #
 # Needs: npm (and node), tar, and for the Debian part apt-get, dpkg-deb, unzip.
 set -euo pipefail
@@ -87,5 +88,6 @@ ls "$out"
 
 if [ "${FIXTURES:-0}" = 1 ]; then
   cd "$here/.."
+  cargo run --quiet --example voxelize -- "$out/bunny.obj" 64 datasets/fixtures/bunny64.safetensors
   cargo run --quiet --example voxelize -- "$out/bunny.obj" 64 datasets/fixtures/bunny64.binvox
 fi

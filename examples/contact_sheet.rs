@@ -10,7 +10,7 @@ use rendernet::voxel::{self, Mesh, VoxelizeOptions, shapes};
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let grid = match args.next() {
-        Some(path) => voxel::voxelize(&Mesh::load(&path)?, &VoxelizeOptions { resolution: 64, ..Default::default() })?,
+        Some(path) => voxel::voxelize(&Mesh::load(&path)?, &VoxelizeOptions::smooth(64))?,
         None => shapes::chair(0).to_grid(64)?,
     };
     let out = args.next().unwrap_or_else(|| "contact-sheet.png".into());

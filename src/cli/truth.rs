@@ -10,7 +10,7 @@ use std::time::Instant;
 /// What to render and from where: shared by `truth` and `render`.
 #[derive(Args, Debug)]
 pub struct SceneArgs {
-    /// Voxel grid (.binvox, .safetensors) or mesh (.obj, .off, .ply, voxelised at --resolution).
+    /// Voxel grid (.binvox, .safetensors, MagicaVoxel .vox) or mesh (.obj, .off, .ply, voxelised at --resolution).
     #[arg(long, value_name = "PATH", conflicts_with = "shape")]
     voxels: Option<PathBuf>,
     /// Grid side used to voxelise a mesh or a procedural --shape.
@@ -99,8 +99,10 @@ fn voxel_err(e: voxel::VoxelError) -> Error {
     Error::Invalid(e.to_string())
 }
 
-/// `datasets/fixtures/bunny64.binvox`, the default scene of `truth` and `render`.
-pub const BUNNY: &[u8] = include_bytes!("../../datasets/fixtures/bunny64.binvox");
+/// `datasets/fixtures/bunny64.safetensors`, the default scene of `truth` and `render`: the
+/// bunny voxelised anti-aliased (`VoxelizeOptions::smooth(64)`, u8 occupancy), so its
+/// iso-surface is smooth rather than a binvox staircase.
+pub const BUNNY: &[u8] = include_bytes!("../../datasets/fixtures/bunny64.safetensors");
 
 /// Loads the grid the flags name, and says what it is.
 pub fn load(a: &SceneArgs) -> Result<(VoxelGrid, String)> {
@@ -112,21 +114,22 @@ pub fn load(a: &SceneArgs) -> Result<(VoxelGrid, String)> {
         }
         // The embedded default: the Stanford bunny (public domain, npm `bunny`) voxelised at
         // 64^3, a shape no training set of ours contains.
-        let grid = Binvox::parse(BUNNY, "embedded bunny64.binvox").map_err(voxel_err)?.grid;
+        let grid = voxel::safetensors_io::from_bytes(BUNNY, "embedded bunny64.safetensors").map_err(voxel_err)?;
         return Ok((grid, "the embedded Stanford bunny at 64^3".into()));
     };
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let grid = match ext.as_str() {
         "binvox" => Binvox::read(path).map_err(voxel_err)?.grid,
         "safetensors" => voxel::safetensors_io::read(path).map_err(voxel_err)?,
+        "vox" => voxel::vox::read(path).map_err(voxel_err)?,
         "obj" | "off" | "ply" => {
             let mesh = Mesh::load(path).map_err(voxel_err)?;
-            let opts = VoxelizeOptions { resolution: a.resolution, ..Default::default() };
-            voxel::voxelize(&mesh, &opts).map_err(voxel_err)?
+            // Anti-aliased: binary occupancy renders as voxel stair-steps (rings, false creases).
+            voxel::voxelize(&mesh, &VoxelizeOptions::smooth(a.resolution)).map_err(voxel_err)?
         }
         _ => {
             return Err(Error::Invalid(format!(
-                "{}: unknown extension; expected .binvox, .safetensors, .obj, .off or .ply",
+                "{}: unknown extension; expected .binvox, .safetensors, .vox, .obj, .off or .ply",
                 path.display()
             )));
         }

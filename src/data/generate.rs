@@ -157,18 +157,17 @@ fn shape_grids(
         Shapes::Chairs => Family::Chair,
         Shapes::Mixed => Family::ALL[i % Family::ALL.len()],
         Shapes::Real => {
+            // The input stays binary like the procedural inputs (`Shape::to_grid`); the truth
+            // grid is anti-aliased so the targets show the mesh, not voxel stair-steps.
             let mesh = Mesh::load(&meshes[i]).map_err(verr)?;
-            let grid = |n| {
-                voxelize(
-                    &mesh,
-                    &VoxelizeOptions {
-                        resolution: n,
-                        ..Default::default()
-                    },
-                )
-                .map_err(verr)
+            let input = VoxelizeOptions {
+                resolution: o.res,
+                ..Default::default()
             };
-            return Ok((grid(o.res)?, grid(o.truth_res)?));
+            return Ok((
+                voxelize(&mesh, &input).map_err(verr)?,
+                voxelize(&mesh, &VoxelizeOptions::smooth(o.truth_res)).map_err(verr)?,
+            ));
         }
     };
     let shape = family.generate(shape_seed(o.seed, i));

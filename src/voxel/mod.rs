@@ -1,4 +1,5 @@
-//! Voxel grids and the shapes that fill them: file formats (binvox, safetensors), triangle mesh
+//! Voxel grids and the shapes that fill them: file formats (binvox, safetensors, MagicaVoxel
+//! `.vox`), triangle mesh
 //! loading (OBJ, OFF, PLY), a solid voxeliser and a procedural shape generator.
 //!
 //! # Axis convention
@@ -13,6 +14,7 @@ pub mod mesh;
 pub mod ply;
 pub mod safetensors_io;
 pub mod shapes;
+pub mod vox;
 pub mod voxelize;
 
 pub use binvox::Binvox;

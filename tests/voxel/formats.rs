@@ -75,6 +75,15 @@ fn safetensors_round_trip_and_validation() {
         safetensors_io::write(&g, &path).unwrap();
         assert_eq!(safetensors_io::read(&path).unwrap(), g);
     }
+    // u8 occupancy (the fixtures' form): exact for 0/1, within 1/510 for fractions.
+    let frac = VoxelGrid::new([3, 4, 5], (0..60).map(|i| i as f32 / 59.0).collect()).unwrap();
+    let bytes = safetensors_io::to_bytes_u8(&frac).unwrap();
+    assert!(bytes.len() < safetensors_io::to_bytes(&frac).unwrap().len());
+    let back = safetensors_io::from_bytes(&bytes, "u8.safetensors").unwrap();
+    assert_eq!(back.dims(), [3, 4, 5]);
+    assert!(back.occupancy().iter().zip(frac.occupancy()).all(|(a, b)| (a - b).abs() <= 1.0 / 510.0 + 1e-7));
+    let binary = pattern_grid(dims);
+    assert_eq!(safetensors_io::from_bytes(&safetensors_io::to_bytes_u8(&binary).unwrap(), "b").unwrap(), binary);
 
     use safetensors::{Dtype, tensor::TensorView};
     let encode = |tensors: Vec<(&str, Dtype, Vec<usize>)>| {
@@ -345,4 +354,59 @@ fn parsers_never_panic_on_truncated_or_corrupted_input() {
             let _ = parse(&b);
         }
     }
+}
+
+#[test]
+fn vox_round_trip_axes_and_malformed_files() {
+    use rendernet::voxel::vox;
+    // Hand-built file: SIZE 2 x 3 x 4 (x, y, z-up), one voxel at (1, 0, 3) with palette index 2.
+    let chunk = |id: &[u8], content: Vec<u8>| {
+        [id.to_vec(), (content.len() as i32).to_le_bytes().to_vec(), 0i32.to_le_bytes().to_vec(), content].concat()
+    };
+    let size: Vec<u8> = [2i32, 3, 4].iter().flat_map(|v| v.to_le_bytes()).collect();
+    let xyzi = [1i32.to_le_bytes().to_vec(), vec![1, 0, 3, 2]].concat();
+    let mut rgba = vec![0u8; 1024];
+    rgba[4..8].copy_from_slice(&[255, 51, 0, 255]);
+    let file = |children: Vec<u8>| {
+        [b"VOX ".to_vec(), 150i32.to_le_bytes().to_vec(), b"MAIN".to_vec(), 0i32.to_le_bytes().to_vec(),
+         (children.len() as i32).to_le_bytes().to_vec(), children].concat()
+    };
+    let good = file([chunk(b"SIZE", size.clone()), chunk(b"XYZI", xyzi.clone()), chunk(b"RGBA", rgba.clone())].concat());
+    let g = vox::parse(&good, "hand.vox").unwrap();
+    assert_eq!(g.dims(), [2, 4, 3], "[D, H, W] = [SX, SZ, SY]");
+    assert_eq!(g.occupied_count(), 1);
+    assert_eq!(g.get(1, 3, 2), 1.0, "(x, y, z) -> [x, z, SY - 1 - y]");
+    let k = g.index(1, 3, 2);
+    let c = g.colour().unwrap();
+    assert_eq!([c[k], c[g.len() + k], c[2 * g.len() + k]], [1.0, 0.2, 0.0]);
+    // Write and read back: same grid, same bytes.
+    let path = tmp("rt.vox");
+    vox::write(&g, &path).unwrap();
+    assert_eq!(vox::read(&path).unwrap(), g);
+    let plain = pattern_grid([5, 7, 9]);
+    assert_eq!(vox::parse(&vox::to_bytes(&plain).unwrap(), "p.vox").unwrap(), plain);
+    assert!(vox::to_bytes(&pattern_grid([300, 2, 2])).is_err());
+
+    let trunc = good[..good.len() - 10].to_vec();
+    let bad_xyz = file([chunk(b"SIZE", size.clone()), chunk(b"XYZI", [1i32.to_le_bytes().to_vec(), vec![2, 0, 0, 1]].concat())].concat());
+    let big_count = file([chunk(b"SIZE", size.clone()), chunk(b"XYZI", [1000i32.to_le_bytes().to_vec(), vec![0, 0, 0, 1]].concat())].concat());
+    let huge: Vec<u8> = [100000i32, 3, 4].iter().flat_map(|v| v.to_le_bytes()).collect();
+    let cases: Vec<(&str, Vec<u8>)> = vec![
+        ("empty", vec![]),
+        ("magic", b"VOXX\x96\0\0\0".to_vec()),
+        ("version", [b"VOX ".to_vec(), 7i32.to_le_bytes().to_vec()].concat()),
+        ("truncated", trunc),
+        ("nosize", file(chunk(b"XYZI", xyzi.clone()))),
+        ("noxyzi", file(chunk(b"SIZE", size.clone()))),
+        ("outside", bad_xyz),
+        ("count", big_count),
+        ("huge", file([chunk(b"SIZE", huge), chunk(b"XYZI", xyzi.clone())].concat())),
+        ("palette", file([chunk(b"SIZE", size.clone()), chunk(b"XYZI", xyzi.clone()), chunk(b"RGBA", vec![0; 10])].concat())),
+        ("negative", [b"VOX ".to_vec(), 150i32.to_le_bytes().to_vec(), b"MAIN".to_vec(), (-5i32).to_le_bytes().to_vec(), 0i32.to_le_bytes().to_vec()].concat()),
+    ];
+    for (name, bytes) in cases {
+        let f = format!("{name}.vox");
+        err_naming(vox::parse(&bytes, &f), &f);
+    }
+    err_naming(vox::read(tmp("missing.vox")), "missing.vox");
 }
