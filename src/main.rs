@@ -41,6 +41,12 @@ enum Cmd {
 }
 
 fn main() -> ExitCode {
+    // `rendernet ... | head` should end quietly like any Unix tool, not panic in println!.
+    // SAFETY: restoring the default disposition of one signal before any thread starts.
+    #[cfg(unix)]
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         // Mesa prints a warning per device open without it; any writable folder will do.
         // SAFETY: single-threaded here, before any other thread (wgpu's) exists.
