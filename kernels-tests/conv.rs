@@ -288,6 +288,19 @@ fn fast_conv2d_and_transposed_forward_and_gradients() {
     check_fast(transposed3d([3, 2, 3], [1, 2, 2], explicit([1, 0, 2], [0, 1, 1]), None), 56);
 }
 
+/// Strided backward input (and transposed forward) runs one stride-1 conv per output phase
+/// with a sub-kernel of the taps that reach it: a 1x1 stride-2 kernel (phases with no taps,
+/// dx zero there), padding before larger than the kernel (negative phase padding), stride 3,
+/// and stride (1, 2, 2) even kernels with explicit asymmetric padding and output_padding-style
+/// larger outputs.
+#[test]
+fn fast_backward_input_by_phase() {
+    check_fast(conv2d([1, 1], [2, 2], Padding::Same), 70);
+    check_fast(conv2d([2, 3], [2, 3], Padding::explicit_2d([3, 1], [0, 2])), 71);
+    check_fast(transposed2d([4, 4], [2, 2], Padding::explicit_2d([1, 2], [2, 1]), Some([1, 8, 10])), 72);
+    check_fast(transposed3d([2, 4, 4], [1, 2, 2], explicit([0, 2, 1], [1, 1, 2]), Some([3, 8, 10])), 73);
+}
+
 /// The tiled kernels at channel counts that are not multiples of their tile (inputs padded to
 /// 4, outputs to 16 with zeros): 1, 2, 3, 5 in and 1, 3, 5 out, conv and transposed, including
 /// the first layer's shape (3D, 1 input channel, 5^3 stride 2) and the 1- and 3-channel heads.
@@ -344,17 +357,27 @@ fn fast_matches_reference_on_random_shapes() {
         let mut pick = |lo: usize, hi: usize| lo + (rng.next_u64() % (hi - lo + 1) as u64) as usize;
         let d2 = seed % 2 == 1;
         let mut kernel = [pick(1, 3), pick(1, 4), pick(1, 4)];
-        let mut stride = [pick(1, 2), pick(1, 2), pick(1, 2)];
+        let mut stride = [pick(1, 3), pick(1, 2), pick(1, 3)];
         let mut input = [pick(3, 6), pick(3, 9), pick(5, 19)];
-        if d2 {
-            (kernel[0], stride[0], input[0]) = (1, 1, 1);
+        // Explicit padding up to k + 1 before (more than the kernel: negative phase padding);
+        // inputs of at least k + 2 keep both the conv's and the transposed conv's output
+        // non-empty.
+        let (mut before, mut after) = ([0; 3], [0; 3]);
+        for a in 0..3 {
+            before[a] = pick(0, kernel[a] + 1);
+            after[a] = pick(0, kernel[a] - 1);
+            input[a] = input[a].max(kernel[a] + 2);
         }
-        // Every third case at stride 1, where backward-input takes the tiled path too.
+        if d2 {
+            (kernel[0], stride[0], input[0], before[0], after[0]) = (1, 1, 1, 0, 0);
+        }
+        // Every third case at stride 1.
         if seed % 3 == 0 {
             stride = [1, 1, 1];
         }
         let (n, ci, co) = (pick(1, 2), pick(1, 20), pick(1, 35));
-        let h = Conv { kernel, stride, padding: Padding::Same };
+        let padding = if seed % 3 == 1 { explicit(before, after) } else { Padding::Same };
+        let h = Conv { kernel, stride, padding };
         let op = if seed % 4 < 2 { Op::Conv(h) } else { Op::Transposed(ConvTranspose { conv: h }) };
         let c = Case { op, kernel: ConvKernel::Fast, d2, n, ci, co, input, output: None };
         let fast = passes(&c, ConvKernel::Fast, seed);

@@ -16,11 +16,14 @@
 //
 // Geometry: the conv being computed ("dispatch geometry") reads an input of `ci` channels
 // over (id, ih, iw) and writes `co` channels over (od, oh, ow); input position of tap k at
-// output o is o*stride - pad + k. A conv's backward-input pass at stride 1 is this same
-// forward conv on dy with the kernel flipped and its channel axes swapped (flip = 1 in the
-// weight packing), with pad' = k - 1 - pad; at stride s > 1 it is that conv on dy dilated by
-// s (zeros between the values), which wastes the multiplications by those zeros (s^2 of
-// them in 2D) but keeps one kernel: a per-phase kernel would avoid them.
+// output o is o*stride - pad + k, the pads being i32 values stored as u32 (they go negative
+// below). A conv's backward-input pass at stride 1 is this same forward conv on dy with the
+// kernel flipped and its channel axes swapped (flip = 1 in the weight packing), with pad' =
+// k - 1 - pad. At stride s > 1 it splits by output phase (dx position i = r + s*m per axis,
+// r = 0..s-1): phase r only meets taps k = k0 + j*s with k0 = (r + pad) mod s, so it is a
+// stride-1 conv of the undilated dy with that flipped sub-kernel of nk = ceil((k - k0) / s)
+// taps and pad' = nk - 1 - (r + pad) div s (possibly negative), writing every s-th dx value
+// from r (the output layout fields below). No multiplication by inserted zeros.
 
 struct Params {
     n: u32, ci: u32, co: u32,
@@ -42,6 +45,10 @@ struct Params {
     // Taps folded into the channel axis (1: none; see conv_fast_pack_folded): weight packing
     // and conv_fast_weight_sum map folded channel c' = c * fold + f back to channel c, tap f.
     fold: u32,
+    // Output layout of conv_fast_forward: element (n, c, od, oh, ow) is written at
+    // (n * co + c) * ycs + yoff + od * ysd + oh * ysh + ow * ysw (a phase of a larger tensor
+    // for strided backward input; the dense layout otherwise).
+    ycs: u32, ysd: u32, ysh: u32, ysw: u32, yoff: u32,
 }
 @group(0) @binding(0) var<uniform> p: Params;
 
@@ -50,10 +57,8 @@ fn lin(gid: vec3<u32>, nwg: vec3<u32>) -> u32 {
 }
 
 // ---- packing: [N, C, id, ih, iw] -> [N, od, oh, ow, cpad] channels-last ------------------
-// Channels past C are zero. With strides (sd, sh, sw) > 1 the source is also dilated: source
-// voxel v lands at v * stride and the voxels between are zero (a strided conv's backward
-// input is a stride-1 conv of its dilated dy). Params: n, ci = C, id/ih/iw source size,
-// od/oh/ow destination size, sd/sh/sw, cpad.
+// Channels past C are zero. Params: n, ci = C, id/ih/iw source size = od/oh/ow destination
+// size, cpad.
 // One invocation per destination voxel, writing its cpad channels as vec4s: the index
 // arithmetic (integer division is scalarised per lane on llvmpipe) is paid once per voxel.
 @group(0) @binding(1) var<storage, read> src: array<f32>;
@@ -69,19 +74,10 @@ fn src_at(n: u32, c: u32, s: u32, s_len: u32, ok: bool) -> f32 {
 fn conv_fast_pack_input(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = lin(gid, nwg);
     if (i >= p.total) { return; }
-    let dst_len = p.od * p.oh * p.ow;
-    let s_len = p.id * p.ih * p.iw;
-    let n = i / dst_len;
-    var s = i % dst_len;
-    var ok = true;
-    if (p.sd * p.sh * p.sw != 1u) {
-        let w = s % p.ow;
-        let h = (s / p.ow) % p.oh;
-        let d = s / (p.ow * p.oh);
-        ok = w % p.sw == 0u && h % p.sh == 0u && d % p.sd == 0u;
-        ok = ok && d / p.sd < p.id && h / p.sh < p.ih && w / p.sw < p.iw;
-        s = select(0u, ((d / p.sd) * p.ih + h / p.sh) * p.iw + w / p.sw, ok);
-    }
+    let s_len = p.od * p.oh * p.ow;
+    let n = i / s_len;
+    let s = i % s_len;
+    let ok = true;
     let cq = p.cpad / 4u;
     for (var q = 0u; q < cq; q++) {
         let c = 4u * q;
@@ -130,7 +126,10 @@ fn conv_fast_pack_folded(@builtin(global_invocation_id) gid: vec3<u32>, @builtin
 
 // ---- packing: weights -> [tap][cpad][co16 * 16] ---------------------------------------------
 // Source layout [co][ci][taps] (flip = 0) or, for backward input, the forward conv's
-// [ci][co][taps] read with the tap order reversed (flip = 1), ci/co being this dispatch's.
+// [ci][co][taps] read flipped (flip = 1), ci/co being this dispatch's: tap t of the (kd, kh,
+// kw) sub-kernel is source tap k0 + (nk - 1 - t) * step per axis of the (id, ih, iw) source
+// kernel, with k0 = (pd, ph, pw) and step = (sd, sh, sw) (one output phase's taps; k0 = 0,
+// step 1 and the same size for the whole kernel), zero past the source kernel's edge.
 // With fold > 1 (flip = 0 only) channel c is folded channel c / fold's tap c % fold, taps
 // being the unfolded ones: the folded axes are the innermost of a tap's index.
 @group(0) @binding(1) var<storage, read> wsrc: array<f32>;
@@ -152,7 +151,12 @@ fn conv_fast_pack_weights(@builtin(global_invocation_id) gid: vec3<u32>, @builti
             let f = max(p.fold, 1u);
             v = wsrc[(o * (p.ci / f) + c / f) * taps * f + tap * f + c % f];
         } else {
-            v = wsrc[(c * p.co + o) * taps + (taps - 1u - tap)];
+            let kd = p.pd + (p.kd - 1u - tap / (p.kh * p.kw)) * p.sd;
+            let kh = p.ph + (p.kh - 1u - (tap / p.kw) % p.kh) * p.sh;
+            let kw = p.pw + (p.kw - 1u - tap % p.kw) * p.sw;
+            if (kd < p.id && kh < p.ih && kw < p.iw) {
+                v = wsrc[(c * p.co + o) * p.id * p.ih * p.iw + (kd * p.ih + kh) * p.iw + kw];
+            }
         }
     }
     wdst[i] = v;
@@ -172,16 +176,15 @@ fn xq(row: u32, w: i32, q: u32) -> vec4<f32> {
     return select(vec4<f32>(0.0), v, inside);
 }
 
-// Writes 4 output channels co..co+3 of output position `pos` (plus bias), skipping those past
-// the tensor's edge.
+// Writes 4 output channels co..co+3 at spatial offset `pos` of the output layout (plus
+// bias), skipping those past the tensor's edge.
 fn put(n: u32, co: u32, pos: u32, ow: u32, v: vec4<f32>) {
     if (ow >= p.ow) { return; }
-    let s_len = p.od * p.oh * p.ow;
     for (var c = 0u; c < 4u; c++) {
         if (co + c < p.co) {
             var b = 0.0;
             if (p.has_bias != 0u) { b = fb[co + c]; }
-            fy[(n * p.co + co + c) * s_len + pos] = v[c] + b;
+            fy[(n * p.co + co + c) * p.ycs + pos] = v[c] + b;
         }
     }
 }
@@ -272,16 +275,17 @@ fn conv_fast_forward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
             }
         }
     }
-    let pos = (od * p.oh + oh) * p.ow + ow0;
+    let pos = p.yoff + od * p.ysd + oh * p.ysh + ow0 * p.ysw;
+    let ys = p.ysw;
     let co = cg * 16u;
     put(n, co, pos, ow0, a00); put(n, co + 4u, pos, ow0, a01); put(n, co + 8u, pos, ow0, a02); put(n, co + 12u, pos, ow0, a03);
-    put(n, co, pos + 1u, ow0 + 1u, a10); put(n, co + 4u, pos + 1u, ow0 + 1u, a11); put(n, co + 8u, pos + 1u, ow0 + 1u, a12); put(n, co + 12u, pos + 1u, ow0 + 1u, a13);
-    put(n, co, pos + 2u, ow0 + 2u, a20); put(n, co + 4u, pos + 2u, ow0 + 2u, a21); put(n, co + 8u, pos + 2u, ow0 + 2u, a22); put(n, co + 12u, pos + 2u, ow0 + 2u, a23);
-    put(n, co, pos + 3u, ow0 + 3u, a30); put(n, co + 4u, pos + 3u, ow0 + 3u, a31); put(n, co + 8u, pos + 3u, ow0 + 3u, a32); put(n, co + 12u, pos + 3u, ow0 + 3u, a33);
-    put(n, co, pos + 4u, ow0 + 4u, a40); put(n, co + 4u, pos + 4u, ow0 + 4u, a41); put(n, co + 8u, pos + 4u, ow0 + 4u, a42); put(n, co + 12u, pos + 4u, ow0 + 4u, a43);
-    put(n, co, pos + 5u, ow0 + 5u, a50); put(n, co + 4u, pos + 5u, ow0 + 5u, a51); put(n, co + 8u, pos + 5u, ow0 + 5u, a52); put(n, co + 12u, pos + 5u, ow0 + 5u, a53);
-    put(n, co, pos + 6u, ow0 + 6u, a60); put(n, co + 4u, pos + 6u, ow0 + 6u, a61); put(n, co + 8u, pos + 6u, ow0 + 6u, a62); put(n, co + 12u, pos + 6u, ow0 + 6u, a63);
-    put(n, co, pos + 7u, ow0 + 7u, a70); put(n, co + 4u, pos + 7u, ow0 + 7u, a71); put(n, co + 8u, pos + 7u, ow0 + 7u, a72); put(n, co + 12u, pos + 7u, ow0 + 7u, a73);
+    put(n, co, pos + 1u * ys, ow0 + 1u, a10); put(n, co + 4u, pos + 1u * ys, ow0 + 1u, a11); put(n, co + 8u, pos + 1u * ys, ow0 + 1u, a12); put(n, co + 12u, pos + 1u * ys, ow0 + 1u, a13);
+    put(n, co, pos + 2u * ys, ow0 + 2u, a20); put(n, co + 4u, pos + 2u * ys, ow0 + 2u, a21); put(n, co + 8u, pos + 2u * ys, ow0 + 2u, a22); put(n, co + 12u, pos + 2u * ys, ow0 + 2u, a23);
+    put(n, co, pos + 3u * ys, ow0 + 3u, a30); put(n, co + 4u, pos + 3u * ys, ow0 + 3u, a31); put(n, co + 8u, pos + 3u * ys, ow0 + 3u, a32); put(n, co + 12u, pos + 3u * ys, ow0 + 3u, a33);
+    put(n, co, pos + 4u * ys, ow0 + 4u, a40); put(n, co + 4u, pos + 4u * ys, ow0 + 4u, a41); put(n, co + 8u, pos + 4u * ys, ow0 + 4u, a42); put(n, co + 12u, pos + 4u * ys, ow0 + 4u, a43);
+    put(n, co, pos + 5u * ys, ow0 + 5u, a50); put(n, co + 4u, pos + 5u * ys, ow0 + 5u, a51); put(n, co + 8u, pos + 5u * ys, ow0 + 5u, a52); put(n, co + 12u, pos + 5u * ys, ow0 + 5u, a53);
+    put(n, co, pos + 6u * ys, ow0 + 6u, a60); put(n, co + 4u, pos + 6u * ys, ow0 + 6u, a61); put(n, co + 8u, pos + 6u * ys, ow0 + 6u, a62); put(n, co + 12u, pos + 6u * ys, ow0 + 6u, a63);
+    put(n, co, pos + 7u * ys, ow0 + 7u, a70); put(n, co + 4u, pos + 7u * ys, ow0 + 7u, a71); put(n, co + 8u, pos + 7u * ys, ow0 + 7u, a72); put(n, co + 12u, pos + 7u * ys, ow0 + 7u, a73);
 }
 
 // ---- backward weight: partial sums over a chunk of output positions -------------------------

@@ -39,6 +39,11 @@ struct Params {
     chunk: u32,
     total: u32,
     fold: u32,
+    ycs: u32,
+    ysd: u32,
+    ysh: u32,
+    ysw: u32,
+    yoff: u32,
 }
 
 fn params(g: &Geometry, cpad: usize) -> Params {
@@ -56,6 +61,11 @@ fn params(g: &Geometry, cpad: usize) -> Params {
         cpad: u(cpad),
         co16: u(g.co.div_ceil(16)),
         fold: 1,
+        // Dense output layout.
+        ycs: od * oh * ow,
+        ysd: oh * ow,
+        ysh: ow,
+        ysw: 1,
         ..Default::default()
     }
 }
@@ -65,25 +75,12 @@ fn dispatch(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, entry: &'static str, mu
     gpu.dispatch(pass, SHADER, entry, &p, args, grid_1d(total as u64, 64)?)
 }
 
-/// `t` ([N, c, src...]) repacked channels-last as [N, dst..., cpad], channels past `c` zero;
-/// voxel v goes to v * stride (zeros between when the stride exceeds 1, see the shader).
-#[allow(clippy::too_many_arguments)]
-fn pack_input(
-    gpu: &Gpu,
-    pass: &mut wgpu::ComputePass<'_>,
-    t: &Tensor,
-    n: usize,
-    c: usize,
-    src: [usize; 3],
-    dst: [usize; 3],
-    stride: [usize; 3],
-    cpad: usize,
-) -> Result<Tensor> {
-    let out = Tensor::zeros(gpu, &[n, volume(dst), cpad])?;
-    let u = |a: [usize; 3]| a.map(|v| v as u32);
-    let ([id, ih, iw], [od, oh, ow], [sd, sh, sw]) = (u(src), u(dst), u(stride));
-    let p = Params { n: n as u32, ci: c as u32, id, ih, iw, od, oh, ow, sd, sh, sw, cpad: cpad as u32, ..Default::default() };
-    dispatch(gpu, pass, "conv_fast_pack_input", p, &[Arg::R(t), Arg::W(&out)], n * volume(dst))?;
+/// `t` ([N, c, sp...]) repacked channels-last as [N, sp..., cpad], channels past `c` zero.
+fn pack_input(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, t: &Tensor, n: usize, c: usize, sp: [usize; 3], cpad: usize) -> Result<Tensor> {
+    let out = Tensor::zeros(gpu, &[n, volume(sp), cpad])?;
+    let [od, oh, ow] = sp.map(|v| v as u32);
+    let p = Params { n: n as u32, ci: c as u32, od, oh, ow, cpad: cpad as u32, ..Default::default() };
+    dispatch(gpu, pass, "conv_fast_pack_input", p, &[Arg::R(t), Arg::W(&out)], n * volume(sp))?;
     Ok(out)
 }
 
@@ -127,7 +124,7 @@ fn fold(g: &Geometry, quantum: usize) -> Folded {
 /// with `cpad` channels (see `conv_fast_pack_folded`); without a fold, a plain packing.
 fn pack_folded(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded, x: &Tensor, cpad: usize) -> Result<Tensor> {
     if f.fold() == 1 {
-        return pack_input(gpu, pass, x, g.n, g.ci, g.input, g.input, [1; 3], cpad);
+        return pack_input(gpu, pass, x, g.n, g.ci, g.input, cpad);
     }
     let out = Tensor::zeros(gpu, &[g.n, volume(f.g.input), cpad])?;
     let u = |v: usize| v as u32;
@@ -142,23 +139,11 @@ fn pack_folded(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Fo
     Ok(out)
 }
 
-/// Weights repacked as [tap][cpad][co16 * 16] for the dispatch geometry `g`; `flip` reads a
-/// forward conv's weights as those of its stride-1 backward-input conv; `fold` > 1 reads
-/// them for `g` being a folded conv (see [`fold`]).
-#[allow(clippy::too_many_arguments)]
-fn pack_weights(
-    gpu: &Gpu,
-    pass: &mut wgpu::ComputePass<'_>,
-    g: &Geometry,
-    w: &Tensor,
-    cpad: usize,
-    flip: bool,
-    fold: usize,
-) -> Result<Tensor> {
-    let taps: usize = g.kernel.iter().product();
-    let copad = g.co.div_ceil(16) * 16;
-    let out = Tensor::zeros(gpu, &[taps, cpad, copad])?;
-    let p = Params { flip: flip as u32, fold: fold as u32, ..params(g, cpad) };
+/// Weights repacked as [tap][cpad][co16 * 16] for the packing parameters `p` (those of the
+/// dispatch geometry, with `flip` and `fold` or a phase's sub-kernel set: see the shader).
+fn pack_weights(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: &Tensor) -> Result<Tensor> {
+    let taps = (p.kd * p.kh * p.kw) as usize;
+    let out = Tensor::zeros(gpu, &[taps, p.cpad as usize, p.co16 as usize * 16])?;
     dispatch(gpu, pass, "conv_fast_pack_weights", p, &[Arg::R(w), Arg::W(&out)], out.numel())?;
     Ok(out)
 }
@@ -167,22 +152,19 @@ fn volume(s: [usize; 3]) -> usize {
     s.iter().product()
 }
 
-/// The tiled forward of dispatch geometry `g` on packed operands: one invocation per 8
-/// outputs along W x 16 output channels.
-#[allow(clippy::too_many_arguments)]
+/// The tiled forward with parameters `p` (of the dispatch geometry, output layout included)
+/// on packed operands: one invocation per 8 outputs along W x 16 output channels.
 fn forward_packed(
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
-    g: &Geometry,
+    p: Params,
     xp: &Tensor,
     wp: &Tensor,
-    cpad: usize,
     b: Option<&Tensor>,
     y: &Tensor,
 ) -> Result<()> {
-    let [od, oh, ow] = g.output;
-    let tiles = g.n * g.co.div_ceil(16) * od * oh * ow.div_ceil(8);
-    let p = Params { has_bias: b.is_some() as u32, ..params(g, cpad) };
+    let tiles = (p.n * p.co16 * p.od * p.oh * p.ow.div_ceil(8)) as usize;
+    let p = Params { has_bias: b.is_some() as u32, ..p };
     let bias = b.map_or(Arg::Absent, Arg::R);
     dispatch(gpu, pass, "conv_fast_forward", p, &[Arg::R(xp), Arg::R(wp), bias, Arg::W(y)], tiles)
 }
@@ -201,18 +183,32 @@ pub(crate) fn forward(
     let f = fold(g, 4);
     let cpad = f.g.ci.div_ceil(4) * 4;
     let xp = pack_folded(gpu, pass, g, &f, x, cpad)?;
-    let wp = pack_weights(gpu, pass, &f.g, w, cpad, false, f.fold())?;
-    forward_packed(gpu, pass, &f.g, &xp, &wp, cpad, b, y)
+    let p = params(&f.g, cpad);
+    let wp = pack_weights(gpu, pass, Params { fold: f.fold() as u32, ..p }, w)?;
+    forward_packed(gpu, pass, p, &xp, &wp, b, y)
 }
 
-/// Whether [`backward_input`] handles `g`: padding before of at most `k - 1` on every axis
-/// (so the flipped conv's padding `k - 1 - pad` is not negative).
-pub(crate) fn supports_backward_input(g: &Geometry) -> bool {
-    (0..3).all(|a| g.pad[a] < g.kernel[a])
+/// One output phase `r` of a backward-input conv along one axis (see the shader header):
+/// dx positions `r + s*m` for `m < len` read dy through the sub-kernel of `taps` taps from
+/// `k0` (step s; at least one tap, weights zero past the kernel) at padding `pad`.
+struct Phase {
+    len: usize,
+    k0: usize,
+    taps: usize,
+    pad: i64,
 }
 
-/// Tiled `dx = conv^T(dy, w) (+ b)`: the stride-1 forward conv of `dy` dilated by the stride,
-/// with the kernel flipped and its channel axes swapped, padded `k - 1 - pad` before.
+/// Phase `r` on an axis with dx length `input`, kernel `k`, stride `s`, padding before `pad`.
+fn phase(r: usize, input: usize, k: usize, s: usize, pad: usize) -> Phase {
+    let k0 = (r + pad) % s;
+    let taps = k.saturating_sub(k0).div_ceil(s).max(1);
+    let len = input.saturating_sub(r).div_ceil(s);
+    Phase { len, k0, taps, pad: taps as i64 - 1 - ((r + pad) / s) as i64 }
+}
+
+/// Tiled `dx = conv^T(dy, w) (+ b)`: per output phase (one at stride 1), a stride-1 forward
+/// conv of the packed dy with that phase's flipped, channel-swapped sub-kernel, writing every
+/// stride-th dx value.
 pub(crate) fn backward_input(
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
@@ -222,19 +218,49 @@ pub(crate) fn backward_input(
     b: Option<&Tensor>,
     dx: &Tensor,
 ) -> Result<()> {
-    let t = Geometry {
-        ci: g.co,
-        co: g.ci,
-        input: [0, 1, 2].map(|a| (g.output[a] - 1) * g.stride[a] + 1),
-        output: g.input,
-        stride: [1; 3],
-        pad: [0, 1, 2].map(|a| g.kernel[a] - 1 - g.pad[a]),
-        ..*g
-    };
-    let cpad = t.ci.div_ceil(4) * 4;
-    let dyp = pack_input(gpu, pass, dy, t.n, t.ci, g.output, t.input, g.stride, cpad)?;
-    let wp = pack_weights(gpu, pass, &t, w, cpad, true, 1)?;
-    forward_packed(gpu, pass, &t, &dyp, &wp, cpad, b, dx)
+    let cpad = g.co.div_ceil(4) * 4;
+    let dyp = pack_input(gpu, pass, dy, g.n, g.co, g.output, cpad)?;
+    let [_, fh, fw] = g.input;
+    let [sd, sh, sw] = g.stride;
+    for i in 0..volume(g.stride) {
+        let r = [i / (sh * sw), (i / sw) % sh, i % sw];
+        let ph = [0, 1, 2].map(|a| phase(r[a], g.input[a], g.kernel[a], g.stride[a], g.pad[a]));
+        if ph.iter().any(|q| q.len == 0) {
+            continue;
+        }
+        let t = Geometry {
+            ci: g.co,
+            co: g.ci,
+            input: g.output,
+            output: ph.each_ref().map(|q| q.len),
+            kernel: ph.each_ref().map(|q| q.taps),
+            stride: [1; 3],
+            pad: [0; 3],
+            ..*g
+        };
+        let base = params(&t, cpad);
+        let u = |v: usize| v as u32;
+        let [id, ih, iw] = g.kernel.map(u);
+        let [pd, ph_, pw] = ph.each_ref().map(|q| u(q.k0));
+        let step = g.stride.map(u);
+        let pack = Params { flip: 1, id, ih, iw, sd: step[0], sh: step[1], sw: step[2], pd, ph: ph_, pw, ..base };
+        let wp = pack_weights(gpu, pass, pack, w)?;
+        // Negative pads travel as two's complement; the shader reads them back with i32().
+        let [pd, ph_, pw] = ph.each_ref().map(|q| q.pad as i32 as u32);
+        let p = Params {
+            pd,
+            ph: ph_,
+            pw,
+            ycs: u(volume(g.input)),
+            ysd: u(sd * fh * fw),
+            ysh: u(sh * fw),
+            ysw: u(sw),
+            yoff: u((r[0] * fh + r[1]) * fw + r[2]),
+            ..base
+        };
+        forward_packed(gpu, pass, p, &dyp, &wp, b, dx)?;
+    }
+    Ok(())
 }
 
 /// Tiled `dw[co, ci, k] = Σ dy[n, co, o] x[n, ci, o*s - pad + k]`: partial sums per chunk of
@@ -251,7 +277,7 @@ pub(crate) fn backward_weight(
     let (cpad, copad) = (f.g.ci.div_ceil(8) * 8, g.co.div_ceil(16) * 16);
     let xp = pack_folded(gpu, pass, g, &f, x, cpad)?;
     let g = &f.g;
-    let dyp = pack_input(gpu, pass, dy, g.n, g.co, g.output, g.output, [1; 3], copad)?;
+    let dyp = pack_input(gpu, pass, dy, g.n, g.co, g.output, copad)?;
     let taps = volume(g.kernel);
     let columns = taps * (cpad / 8) * (copad / 16);
     // Chunks of output rows (n, od, oh): enough for ~1024 invocations (lavapipe spreads
