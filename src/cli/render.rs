@@ -33,19 +33,6 @@ pub struct RenderArgs {
     out: PathBuf,
 }
 
-fn side_by_side(a: &Image, b: &Image) -> Image {
-    let s = a.size;
-    let mut data = Vec::with_capacity(3 * s * 2 * s);
-    for c in 0..3 {
-        for y in 0..s {
-            data.extend((0..s).map(|x| a.get(c.min(a.channels - 1), y, x)));
-            data.extend((0..s).map(|x| b.get(c.min(b.channels - 1), y, x)));
-        }
-    }
-    // A two-wide strip is stored as a 2s x s image: rows of 2s values.
-    Image { channels: 3, size: s, data }
-}
-
 /// Loads the grid and weights, renders, writes the PNG and reports timings.
 pub fn run(a: RenderArgs) -> Result<()> {
     let t0 = Instant::now();
@@ -66,7 +53,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         let truth = reference::Renderer::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, a.size as u32)?;
         let mse = img.data.iter().zip(&truth.data).map(|(x, y)| ((x - y) as f64).powi(2)).sum::<f64>() / img.data.len() as f64;
         println!("PSNR against the reference renderer: {:.2} dB", psnr_from_mse(mse as f32, 1.0));
-        save_wide(&side_by_side(&img, &truth), &a.out)?;
+        save_pair(&img, &truth, &a.out)?;
     } else {
         img.save_png(&a.out)?;
     }
@@ -81,12 +68,11 @@ pub fn run(a: RenderArgs) -> Result<()> {
     Ok(())
 }
 
-fn save_wide(img: &Image, path: &std::path::Path) -> Result<()> {
-    let (w, h) = (2 * img.size as u32, img.size as u32);
-    let plane = (w * h) as usize;
-    let buf = image::RgbImage::from_fn(w, h, |x, y| {
-        let i = (y * w + x) as usize;
-        image::Rgb(std::array::from_fn(|c| (img.data[c * plane + i].clamp(0.0, 1.0) * 255.0).round() as u8))
-    });
-    buf.save(path).map_err(|e| Error::Invalid(format!("{}: {e}", path.display())))
+/// The network's image and the reference's, side by side in one PNG.
+fn save_pair(net: &Image, truth: &Image, path: &std::path::Path) -> Result<()> {
+    let s = net.size as u32;
+    let mut strip = image::RgbImage::new(2 * s, s);
+    image::imageops::replace(&mut strip, &net.to_rgb8(), 0, 0);
+    image::imageops::replace(&mut strip, &truth.to_rgb8(), s as i64, 0);
+    strip.save(path).map_err(|e| Error::Invalid(format!("{}: {e}", path.display())))
 }

@@ -5,7 +5,6 @@
 //! the old file or the new one, never a torn one.
 
 use super::exec::Executor;
-use super::Kind;
 use crate::error::{Error, Result};
 use crate::gpu::{Gpu, Tensor};
 use safetensors::{Dtype, SafeTensors, tensor::TensorView};
@@ -213,9 +212,4 @@ impl Executor {
         self.seed = seed;
         Ok(())
     }
-}
-
-/// Whether a value kind is a parameter (for callers walking a graph).
-pub fn is_param(k: &Kind) -> bool {
-    matches!(k, Kind::Param(_))
 }

@@ -129,7 +129,6 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
     let mut curve = if resume.is_some() { plot::read_log(&log, start) } else { (Vec::new(), Vec::new()) };
     let mut pending: Vec<(u64, f32)> = Vec::new();
     let mut psnr = f32::NAN;
-    let t0 = std::time::Instant::now();
     for step in start..cfg.steps {
         let w = window(step);
         if w != cur.window {
@@ -167,7 +166,6 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
             report(Progress::Eval { step: step + 1, psnr, checkpoint: cfg.out.clone() });
         }
     }
-    let _ = t0;
     Ok(psnr)
 }
 
