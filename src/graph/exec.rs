@@ -368,6 +368,15 @@ impl Executor {
                     ops::add::copy(gpu, pass, &dy, &t.0)?;
                 }
             } else {
+                // Values a rule does not declare in `saves()` may be gone already; `dy` stands
+                // in for them (rules never read them). A declared one that is missing would
+                // mean a planner bug: refuse rather than compute with the wrong buffer.
+                let (saved, out_saved) = n.op.saves();
+                let missing = saved.iter().find(|&&j| self.values[n.inputs[j].0].is_none()).map(|&j| n.inputs[j])
+                    .or((out_saved && self.values[n.output.0].is_none()).then_some(n.output));
+                if let Some(v) = missing {
+                    return Err(Error::Invalid(format!("internal: node '{}' needs '{}' for backward but it was released", n.name, self.graph.info(v).name)));
+                }
                 let ins: Vec<&Tensor> = n.inputs.iter().map(|i| self.values[i.0].as_ref()).map(|t| t.unwrap_or(&dy)).collect();
                 let y = self.values[n.output.0].clone().unwrap_or_else(|| dy.clone());
                 let dx: Vec<Option<&Tensor>> = targets.iter().map(|t| t.as_ref().map(|t| &t.0)).collect();
