@@ -261,10 +261,12 @@ fn conv_transpose3d_same_and_explicit() {
     check(&transposed3d([3, 2, 3], [1, 2, 2], explicit([1, 0, 2], [0, 1, 1]), None), 35);
 }
 
-/// Every case above, again with the tiled kernels forced (`ConvKernel::Fast`; passes they do
-/// not support fall back to the reference kernels, which is what callers get too).
+/// Every case above, again with each family of tiled kernels forced (`ConvKernel::Fast`
+/// reads buffers, `ConvKernel::Texture` textures and subgroup shuffles for the forward and
+/// backward-input passes).
 fn check_fast(c: Case, seed: u64) {
     check(&Case { kernel: ConvKernel::Fast, ..c }, seed);
+    check(&Case { kernel: ConvKernel::Texture, ..c }, seed);
 }
 
 #[test]
@@ -380,10 +382,12 @@ fn fast_matches_reference_on_random_shapes() {
         let h = Conv { kernel, stride, padding };
         let op = if seed % 4 < 2 { Op::Conv(h) } else { Op::Transposed(ConvTranspose { conv: h }) };
         let c = Case { op, kernel: ConvKernel::Fast, d2, n, ci, co, input, output: None };
-        let fast = passes(&c, ConvKernel::Fast, seed);
         let slow = passes(&c, ConvKernel::Reference, seed);
-        for (k, what) in ["forward", "dx", "dw"].iter().enumerate() {
-            assert_close(&format!("seed {seed}: {c:?} {what}"), &fast[k], &slow[k], 1e-3, 1e-4);
+        for kernel in [ConvKernel::Fast, ConvKernel::Texture] {
+            let fast = passes(&c, kernel, seed);
+            for (k, what) in ["forward", "dx", "dw"].iter().enumerate() {
+                assert_close(&format!("seed {seed}: {kernel:?} {c:?} {what}"), &fast[k], &slow[k], 1e-3, 1e-4);
+            }
         }
     }
 }

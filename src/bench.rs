@@ -79,3 +79,55 @@ pub fn median(v: &[f64]) -> f64 {
         n => 0.5 * (s[n / 2 - 1] + s[n / 2]),
     }
 }
+
+/// Multiply-adds per invocation and loop iteration of `shaders/bench_fma.wgsl`: 8 vec4
+/// accumulators x 4 repeats, 2 FLOPs each.
+const FMA_FLOPS_PER_ITER: f64 = 8.0 * 4.0 * 4.0 * 2.0;
+
+/// The adapter's FMA ceiling in GFLOP/s: the best of `samples` timings of a kernel doing
+/// nothing but independent FMAs (`shaders/bench_fma.wgsl`), for reading kernel speeds as a
+/// fraction of what this adapter reaches at all.
+pub fn fma_ceiling(gpu: &Gpu, clock: Clock, samples: usize) -> Result<f64> {
+    use crate::gpu::{Arg, Shader, Tensor, grid_1d};
+    const SHADER: Shader = Shader { name: "bench_fma", source: include_str!("../shaders/bench_fma.wgsl") };
+    #[repr(C)]
+    #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+    struct Params {
+        iters: u32,
+        total: u32,
+    }
+    let total = 16384u32;
+    let iters = 1024u32;
+    let out = Tensor::zeros(gpu, &[total as usize])?;
+    let params = Params { iters, total };
+    let grid = grid_1d(total as u64, 64)?;
+    let mut record = |pass: &mut wgpu::ComputePass<'_>| gpu.dispatch(pass, SHADER, "bench_fma", &params, &[Arg::W(&out)], grid);
+    time_calls(gpu, clock, 1, &mut record)?; // compile
+    let flops = total as f64 * iters as f64 * FMA_FLOPS_PER_ITER;
+    let mut best = 0.0f64;
+    for _ in 0..samples.max(1) {
+        let ms = time_calls(gpu, clock, 4, &mut record)?;
+        best = best.max(flops / (ms * 1e6));
+    }
+    Ok(best)
+}
+
+/// The CPU model (Linux `/proc/cpuinfo`), which decides lavapipe's speed: a kernel's speed on
+/// lavapipe is only meaningful next to it. `None` where it cannot be read.
+pub fn cpu_model() -> Option<String> {
+    let info = std::fs::read_to_string("/proc/cpuinfo").ok()?;
+    let field = |name: &str| {
+        let line = info.lines().find(|l| l.split(':').next().is_some_and(|k| k.trim() == name))?;
+        Some(line.split_once(':')?.1.trim().to_string())
+    };
+    let flags = field("flags").unwrap_or_default();
+    let simd = if flags.split(' ').any(|f| f == "avx512f") {
+        "AVX-512"
+    } else if flags.split(' ').any(|f| f == "avx2") {
+        "AVX2, no AVX-512"
+    } else {
+        "no AVX2"
+    };
+    let (family, model) = (field("cpu family").unwrap_or_default(), field("model").unwrap_or_default());
+    Some(format!("{} (family {family} model {model}, {simd}, {} threads)", field("model name")?, info.matches("processor\t").count().max(1)))
+}

@@ -24,8 +24,10 @@ pub struct BenchArgs {
     /// Samples per measurement; the median is reported.
     #[arg(long, default_value_t = 5)]
     repeat: usize,
-    /// Which conv kernels: reference, fast, or both (interleaved, so both see the same load).
-    #[arg(long, default_value = "both", value_parser = ["reference", "fast", "both"])]
+    /// Which conv kernels, comma-separated: reference (one output per invocation), fast
+    /// (tiled, storage buffers), texture (tiled, textures + subgroup shuffles), or all.
+    /// Kernels of one case are sampled in turn, so they see the same machine load.
+    #[arg(long, default_value = "all")]
     kernel: String,
 }
 
@@ -52,9 +54,11 @@ fn pass_name(p: Pass) -> &'static str {
 
 const PASSES: [Pass; 3] = [Pass::Forward, Pass::BackwardInput, Pass::BackwardWeight];
 
+const KERNELS: [(&str, ConvKernel); 3] =
+    [("reference", ConvKernel::Reference), ("fast", ConvKernel::Fast), ("texture", ConvKernel::Texture)];
+
 fn kernels(choice: &str) -> Vec<(&'static str, ConvKernel)> {
-    let all = [("reference", ConvKernel::Reference), ("fast", ConvKernel::Fast)];
-    all.into_iter().filter(|(n, _)| choice == "both" || choice == *n).collect()
+    KERNELS.into_iter().filter(|(n, _)| choice == "all" || choice.split(',').any(|c| c.trim() == *n)).collect()
 }
 
 /// A forward conv case set: input `xs`, weights `ws` (tensors are zeros: timing only).
@@ -67,7 +71,7 @@ fn conv_cases(gpu: &Gpu, op: &'static str, shape: &str, c: Conv, xs: &[usize], w
     let mut out = Vec::new();
     for pass in PASSES {
         for (name, k) in kernels(choice) {
-            if name == "fast" && !c.runs_fast(k, pass, xs, ws)? {
+            if name != "reference" && !c.runs_fast(k, pass, xs, ws)? {
                 continue;
             }
             let (x, w, y, b) = (x.clone(), w.clone(), y.clone(), b.clone());
@@ -92,7 +96,7 @@ fn transposed_cases(gpu: &Gpu, shape: &str, t: ConvTranspose, xs: &[usize], ws: 
     let mut out = Vec::new();
     for pass in PASSES {
         for (name, k) in kernels(choice) {
-            if name == "fast" && !t.runs_fast(k, pass, xs, ws, &ys)? {
+            if name != "reference" && !t.runs_fast(k, pass, xs, ws, &ys)? {
                 continue;
             }
             let (x, w, y, b) = (x.clone(), w.clone(), y.clone(), b.clone());
@@ -146,11 +150,33 @@ fn cases(gpu: &Gpu, choice: &str) -> Result<Vec<Case>> {
     Ok(v)
 }
 
-/// Runs the benchmark and prints a table or JSON.
+/// What every row carries besides its own timing: where it ran and the same-run ceiling.
+struct Machine {
+    adapter: String,
+    cpu: Option<String>,
+    ceiling: f64,
+}
+
+impl Machine {
+    fn row(&self, op: &str, shape: &str, pass: &str, kernel: &str, ms: f64, gflops: f64) -> serde_json::Value {
+        serde_json::json!({
+            "op": op, "shape": shape, "pass": pass, "kernel": kernel,
+            "ms": finite(ms), "gflops": finite(gflops),
+            "fraction_of_fma_ceiling": finite(gflops / self.ceiling),
+            "adapter": self.adapter, "cpu": self.cpu,
+        })
+    }
+}
+
+/// JSON has no NaN or infinity: such values become null.
+fn finite(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
 /// Whole-network entries: a RenderNet forward at full size and a training step on the
 /// largest patch of the schedule, with the executor's dispatch, submit and memory figures.
 /// Timed by wall clock around each submit and wait (the executor owns its encoder).
-fn model_rows(gpu: &Gpu, repeat: usize, json: bool, adapter: &str) -> Result<Vec<String>> {
+fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine) -> Result<Vec<(String, serde_json::Value)>> {
     let p = Preset::tiny();
     let head = Head::Phong(phong_of(&Light::default()));
     let mut rows = Vec::new();
@@ -173,38 +199,41 @@ fn model_rows(gpu: &Gpu, repeat: usize, json: bool, adapter: &str) -> Result<Vec
         let gflops = flops / (ms * 1e6);
         let img = p.image_for(win);
         let shape = format!("{} {}^3 grid, {img}x{img} image, batch 1", p.name, p.input);
-        rows.push(if json {
-            format!(
-                "{{\"op\":\"rendernet\",\"shape\":\"{shape}\",\"pass\":\"{pass}\",\"kernel\":\"auto\",\"gflops\":{gflops:.3},\"ms\":{ms:.2},\"adapter\":\"{}\",\"dispatches\":{},\"submits_per_step\":{},\"peak_bytes\":{},\"tensor_bytes\":{}}}",
-                adapter.replace('"', "'"),
-                stats.dispatches,
-                stats.submits,
-                stats.peak_bytes,
-                stats.tensor_bytes
-            )
-        } else {
-            format!(
-                "{:<17} {:<34} {:<16} {:<9} {ms:>10.1} {gflops:>9.2}  ({} dispatches, {} submit, peak {:.1} MiB of {:.1} MiB tensors)",
-                "rendernet", shape, pass, "auto", stats.dispatches, stats.submits,
-                stats.peak_bytes as f64 / 1048576.0, stats.tensor_bytes as f64 / 1048576.0
-            )
-        });
+        let mut json = m.row("rendernet", &shape, pass, "auto", ms, gflops);
+        json["dispatches"] = stats.dispatches.into();
+        json["submits_per_step"] = stats.submits.into();
+        json["peak_bytes"] = stats.peak_bytes.into();
+        json["tensor_bytes"] = stats.tensor_bytes.into();
+        let text = format!(
+            "{:<17} {:<34} {:<16} {:<9} {ms:>10.1} {gflops:>9.2} {:>8.1}%  ({} dispatches, {} submit, peak {:.1} MiB of {:.1} MiB tensors)",
+            "rendernet", shape, pass, "auto", 100.0 * gflops / m.ceiling, stats.dispatches, stats.submits,
+            stats.peak_bytes as f64 / 1048576.0, stats.tensor_bytes as f64 / 1048576.0
+        );
+        rows.push((text, json));
     }
     Ok(rows)
 }
 
+/// Runs the benchmark and prints a table or JSON.
 pub fn run(a: BenchArgs) -> Result<()> {
+    if let Some(bad) = a.kernel.split(',').map(str::trim).find(|k| *k != "all" && !KERNELS.iter().any(|(n, _)| n == k)) {
+        return Err(rendernet::Error::Invalid(format!(
+            "--kernel: unknown kernel '{bad}'; expected a comma-separated list of reference, fast, texture, or all"
+        )));
+    }
     let gpu = Gpu::new()?;
     let clock = bench::default_clock(&gpu);
     let mut all = cases(&gpu, &a.kernel)?;
     if let Some(f) = &a.filter {
         all.retain(|c| c.op.contains(f.as_str()) || c.shape.contains(f.as_str()));
     }
-    let adapter = gpu.info.name.clone();
+    let mut m = Machine { adapter: gpu.info.name.clone(), cpu: bench::cpu_model(), ceiling: bench::fma_ceiling(&gpu, clock, 5)? };
     if !a.json {
         let how = if clock == Clock::Gpu { "GPU timestamps" } else { "wall time" };
-        println!("adapter: {adapter} ({how}; median of {} samples)", a.repeat);
-        println!("{:<17} {:<34} {:<16} {:<9} {:>10} {:>9}", "op", "shape", "pass", "kernel", "ms", "GFLOP/s");
+        println!("adapter: {} ({how}; median of {} samples)", m.adapter, a.repeat);
+        println!("cpu:     {}", m.cpu.as_deref().unwrap_or("unknown"));
+        println!("FMA ceiling (shaders/bench_fma.wgsl, best of 5): {:.1} GFLOP/s", m.ceiling);
+        println!("{:<17} {:<34} {:<16} {:<9} {:>10} {:>9} {:>9}", "op", "shape", "pass", "kernel", "ms", "GFLOP/s", "ceiling");
     }
     let mut json = Vec::new();
     // Cases of one (op, shape, pass) are sampled in turn, so kernels compared see the same load.
@@ -233,26 +262,37 @@ pub fn run(a: BenchArgs) -> Result<()> {
             let gflops = c.flops / (ms * 1e6);
             let pass = pass_name(c.pass);
             if a.json {
-                json.push(format!(
-                    "{{\"op\":\"{}\",\"shape\":\"{}\",\"pass\":\"{pass}\",\"kernel\":\"{}\",\"gflops\":{gflops:.3},\"ms\":{ms:.4},\"adapter\":\"{}\"}}",
-                    c.op, c.shape, c.kernel, adapter.replace('"', "'")
-                ));
+                json.push(m.row(c.op, &c.shape, pass, c.kernel, ms, gflops));
             } else {
-                println!("{:<17} {:<34} {:<16} {:<9} {ms:>10.3} {gflops:>9.2}", c.op, c.shape, pass, c.kernel);
+                println!(
+                    "{:<17} {:<34} {:<16} {:<9} {ms:>10.3} {gflops:>9.2} {:>8.1}%",
+                    c.op, c.shape, pass, c.kernel, 100.0 * gflops / m.ceiling
+                );
             }
         }
         i = j;
     }
     if a.filter.as_deref().is_none_or(|f| "rendernet".contains(f)) {
-        let rows = model_rows(&gpu, a.repeat, a.json, &adapter)?;
-        if a.json {
-            json.extend(rows);
-        } else {
-            rows.iter().for_each(|r| println!("{r}"));
+        for (text, row) in model_rows(&gpu, a.repeat, &m)? {
+            if a.json {
+                json.push(row);
+            } else {
+                println!("{text}");
+            }
         }
     }
+    // The ceiling again at the end: the machine's load may have changed over the run.
+    let after = bench::fma_ceiling(&gpu, clock, 5)?;
+    m.ceiling = m.ceiling.max(after);
     if a.json {
-        println!("[\n  {}\n]", json.join(",\n  "));
+        let out = serde_json::json!({
+            "adapter": m.adapter, "cpu": m.cpu,
+            "fma_ceiling_gflops": finite(m.ceiling), "fma_ceiling_at_end_gflops": finite(after),
+            "rows": json,
+        });
+        println!("{}", serde_json::to_string_pretty(&out).map_err(|e| rendernet::Error::Invalid(e.to_string()))?);
+    } else {
+        println!("FMA ceiling at the end of the run: {after:.1} GFLOP/s");
     }
     Ok(())
 }

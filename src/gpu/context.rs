@@ -57,8 +57,9 @@ pub(crate) fn open() -> Result<Opened> {
     };
     let info = adapter.get_info();
     let limits = adapter.limits();
-    // Only features we use: timestamps for `bench`, nothing a portable kernel depends on.
-    let wanted = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES;
+    // Only features we use: timestamps for `bench`; subgroups for the texture conv kernels,
+    // which fall back to the storage-buffer ones where they are missing.
+    let wanted = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES | wgpu::Features::SUBGROUP;
     let features = adapter.features() & wanted;
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some("rendernet"),

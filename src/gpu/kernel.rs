@@ -27,6 +27,33 @@ pub enum Arg<'a> {
     W(&'a Tensor),
     /// An absent optional read-only input; the shader must not read it (a flag says so).
     Absent,
+    /// A sampled (read with `textureLoad`) float texture of the given dimension.
+    Texture(&'a wgpu::TextureView, wgpu::TextureViewDimension),
+    /// A write-only rgba32float storage texture of the given dimension.
+    StorageTexture(&'a wgpu::TextureView, wgpu::TextureViewDimension),
+}
+
+impl Arg<'_> {
+    fn layout_entry(&self, binding: u32) -> wgpu::BindGroupLayoutEntry {
+        let ty = match *self {
+            Arg::Texture(_, view_dimension) => wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension,
+                multisampled: false,
+            },
+            Arg::StorageTexture(_, view_dimension) => wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::WriteOnly,
+                format: wgpu::TextureFormat::Rgba32Float,
+                view_dimension,
+            },
+            _ => wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: !matches!(self, Arg::W(_)) },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+        };
+        wgpu::BindGroupLayoutEntry { binding, visibility: wgpu::ShaderStages::COMPUTE, ty, count: None }
+    }
 }
 
 pub(crate) struct Pipeline {
@@ -84,17 +111,7 @@ impl Gpu {
             count: None,
         }];
         for (i, a) in args.iter().enumerate() {
-            let read_only = !matches!(a, Arg::W(_));
-            entries.push(wgpu::BindGroupLayoutEntry {
-                binding: i as u32 + 1,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            });
+            entries.push(a.layout_entry(i as u32 + 1));
         }
         let label = format!("{}::{}", shader.name, entry);
         let layout = self.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -151,11 +168,12 @@ impl Gpu {
         });
         let mut entries = vec![wgpu::BindGroupEntry { binding: 0, resource: ubuf.as_entire_binding() }];
         for (i, a) in args.iter().enumerate() {
-            let buf = match a {
-                Arg::R(t) | Arg::W(t) => t.buffer(),
-                Arg::Absent => &self.dummy,
+            let resource = match a {
+                Arg::R(t) | Arg::W(t) => t.buffer().as_entire_binding(),
+                Arg::Absent => self.dummy.as_entire_binding(),
+                Arg::Texture(v, _) | Arg::StorageTexture(v, _) => wgpu::BindingResource::TextureView(v),
             };
-            entries.push(wgpu::BindGroupEntry { binding: i as u32 + 1, resource: buf.as_entire_binding() });
+            entries.push(wgpu::BindGroupEntry { binding: i as u32 + 1, resource });
         }
         let bg = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: None,

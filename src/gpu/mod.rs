@@ -15,6 +15,10 @@ use crate::error::{Error, Result};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
+thread_local! {
+    static SUBMITS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
 /// A GPU (or lavapipe) device with its queue, limits and caches.
 pub struct Gpu {
     /// The wgpu device.
@@ -33,6 +37,9 @@ pub struct Gpu {
     /// binding the same buffer as read and read-write in one dispatch, so aliasing is no option.
     dummy: wgpu::Buffer,
     dispatches: std::sync::atomic::AtomicU64,
+    /// Whether `ConvKernel::Auto` reads textures (decided once per device by
+    /// `ops::conv_fast::calibrated`).
+    pub(crate) conv_textures: std::sync::OnceLock<bool>,
 }
 
 impl Gpu {
@@ -56,12 +63,28 @@ impl Gpu {
             modules: Mutex::new(HashMap::new()),
             dummy,
             dispatches: Default::default(),
+            conv_textures: Default::default(),
         })
     }
 
     /// Dispatches recorded since the device was opened (for per-step statistics).
     pub fn dispatch_count(&self) -> u64 {
         self.dispatches.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    /// Queue submits (each followed by a wait) made by the calling thread, on any device: a
+    /// step's count is then its own even while other threads share the device.
+    pub fn submit_count(&self) -> u64 {
+        SUBMITS.with(|c| c.get())
+    }
+
+    /// Whether subgroup operations are enabled with subgroups of a multiple of 8 lanes (what
+    /// the texture conv kernels need; lavapipe has 8).
+    pub fn has_subgroups_of_8(&self) -> bool {
+        self.features.contains(wgpu::Features::SUBGROUP)
+            && self.info.subgroup_min_size >= 8
+            && self.info.subgroup_min_size % 8 == 0
+            && self.info.subgroup_max_size % 8 == 0
     }
 
     /// Whether GPU timestamps can be taken inside compute passes.
@@ -84,6 +107,7 @@ impl Gpu {
     /// Submits one encoder and blocks until the device has finished it.
     pub fn submit_and_wait(&self, enc: wgpu::CommandEncoder) -> Result<()> {
         let idx = self.queue.submit([enc.finish()]);
+        SUBMITS.with(|c| c.set(c.get() + 1));
         self.device
             .poll(wgpu::PollType::Wait { submission_index: Some(idx), timeout: None })
             .map(|_| ())

@@ -19,7 +19,8 @@ use crate::ops;
 pub struct StepStats {
     /// Compute dispatches recorded.
     pub dispatches: u64,
-    /// Queue submits (1 for a whole training step).
+    /// Queue submits with their waits during the step, counted by the device (1 for a whole
+    /// training step: the NaN guard is read back from that submit).
     pub submits: u64,
     /// Bytes the memory planner's pool has allocated: its peak.
     pub peak_bytes: u64,
@@ -51,8 +52,11 @@ fn bytes(shape: &[usize]) -> u64 {
 }
 
 impl Executor {
-    /// Allocates inputs (zeroed) and parameters (initialised from `seed`).
+    /// Allocates inputs (zeroed) and parameters (initialised from `seed`), and settles the
+    /// device's conv kernel choice (a calibration with its own submits, the first time on a
+    /// machine) so that no step pays for it.
     pub fn new(gpu: &Gpu, graph: Graph, seed: u64) -> Result<Executor> {
+        crate::ops::conv::calibrate(gpu);
         let n = graph.values.len();
         let mut values = vec![None; n];
         for (i, v) in graph.values.iter().enumerate() {
@@ -219,7 +223,7 @@ impl Executor {
                 self.pool.release(t);
             }
         }
-        let d0 = gpu.dispatch_count();
+        let (d0, s0) = (gpu.dispatch_count(), gpu.submit_count());
         let tensor_bytes;
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         {
@@ -237,7 +241,7 @@ impl Executor {
             self.check_guard(gpu)?;
             self.step += 1;
         }
-        Ok(StepStats { dispatches: gpu.dispatch_count() - d0, submits: 1, peak_bytes: self.pool.allocated_bytes(), tensor_bytes })
+        Ok(StepStats { dispatches: gpu.dispatch_count() - d0, submits: gpu.submit_count() - s0, peak_bytes: self.pool.allocated_bytes(), tensor_bytes })
     }
 
     /// Reads the guard flags copied out in the step's own submit; on NaN/Inf names the first

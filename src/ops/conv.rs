@@ -11,9 +11,10 @@ use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
 
 const SHADER: Shader = Shader { name: "conv", source: include_str!("../../shaders/conv.wgsl") };
 
-/// Which kernels a conv call runs. `Auto` (what [`Conv::forward`] and friends use) picks
-/// the tiled kernels where they apply and pay (a small table by channel counts); the others force a choice so
-/// tests and `rendernet bench` can compare the two on the same call.
+/// Which kernels a conv call runs. `Auto` (what [`Conv::forward`] and friends use) runs the
+/// tiled kernels, reading textures or buffers by a per-device calibration (cached on disk;
+/// `RENDERNET_CONV_OPERANDS=buffers|textures` overrides it); the others force a choice so
+/// tests and `rendernet bench` can compare them on the same call.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum ConvKernel {
     /// Choose by shape.
@@ -21,8 +22,12 @@ pub enum ConvKernel {
     Auto,
     /// The reference kernels: one invocation per output value.
     Reference,
-    /// The tiled kernels wherever they support the shape (else the reference).
+    /// The tiled kernels reading storage buffers.
     Fast,
+    /// The tiled kernels reading textures, sharing loads across a subgroup. Falls back to
+    /// the buffer kernels where the device lacks subgroups of 8 or the textures would exceed
+    /// its limits.
+    Texture,
 }
 
 /// How a conv pads its input, per spatial axis (depth, height, width).
@@ -354,6 +359,24 @@ pub(crate) fn use_fast(kernel: ConvKernel, _pass: Pass, _g: &Geometry) -> bool {
     kernel != ConvKernel::Reference
 }
 
+/// Settles which operands [`ConvKernel::Auto`] reads on `gpu` (see `conv_fast::calibrated`):
+/// the first call on a machine times both kernel families on a small conv, later calls read
+/// the cached answer. Conv calls do this themselves; call it first to keep the cost out of a
+/// timed or counted step.
+pub fn calibrate(gpu: &Gpu) {
+    conv_fast::calibrated(gpu);
+}
+
+/// The operands the tiled kernels read for `kernel`; `Auto` takes the calibrated choice
+/// (see `conv_fast::calibrated`).
+fn operands(gpu: &Gpu, kernel: ConvKernel) -> conv_fast::Operands {
+    match kernel {
+        ConvKernel::Fast => conv_fast::Operands::Buffers,
+        ConvKernel::Texture => conv_fast::Operands::Textures,
+        _ => conv_fast::calibrated(gpu),
+    }
+}
+
 /// Records the forward conv of `g` (shapes already checked by the caller): `y = conv(x, w) + b`.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn dispatch_forward(
@@ -367,7 +390,7 @@ pub(crate) fn dispatch_forward(
     y: &Tensor,
 ) -> Result<()> {
     if use_fast(kernel, Pass::Forward, g) {
-        return conv_fast::forward(gpu, pass, g, x, w, b, y);
+        return conv_fast::forward(gpu, pass, g, x, w, b, y, operands(gpu, kernel));
     }
     let total = y.numel();
     let args = [Arg::R(x), Arg::R(w), bias_arg(b), Arg::W(y)];
@@ -388,7 +411,7 @@ pub(crate) fn dispatch_backward_input(
     dx: &Tensor,
 ) -> Result<()> {
     if use_fast(kernel, Pass::BackwardInput, g) {
-        return conv_fast::backward_input(gpu, pass, g, dy, w, b, dx);
+        return conv_fast::backward_input(gpu, pass, g, dy, w, b, dx, operands(gpu, kernel));
     }
     let total = dx.numel();
     let args = [Arg::R(dy), Arg::R(w), bias_arg(b), Arg::W(dx)];
@@ -408,7 +431,7 @@ pub(crate) fn dispatch_backward_weight(
     dw: &Tensor,
 ) -> Result<()> {
     if use_fast(kernel, Pass::BackwardWeight, g) {
-        return conv_fast::backward_weight(gpu, pass, g, x, dy, dw);
+        return conv_fast::backward_weight(gpu, pass, g, x, dy, dw, operands(gpu, kernel));
     }
     let total = dw.numel();
     let args = [Arg::R(x), Arg::R(dy), Arg::W(dw)];

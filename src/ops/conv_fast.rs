@@ -127,6 +127,13 @@ fn pack_folded(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Fo
         return pack_input(gpu, pass, x, g.n, g.ci, g.input, cpad);
     }
     let out = Tensor::zeros(gpu, &[g.n, volume(f.g.input), cpad])?;
+    let p = folded_params(g, f, cpad);
+    dispatch(gpu, pass, "conv_fast_pack_folded", p, &[Arg::R(x), Arg::W(&out)], g.n * volume(f.g.input))?;
+    Ok(out)
+}
+
+/// Parameters of the folded packings (see `conv_fast_pack_folded`).
+fn folded_params(g: &Geometry, f: &Folded, cpad: usize) -> Params {
     let u = |v: usize| v as u32;
     let [id, ih, iw] = g.input.map(u);
     let [od, oh, ow] = f.g.input.map(u);
@@ -134,9 +141,7 @@ fn pack_folded(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Fo
     let (sh, ph) = if f.fh > 1 { (u(g.stride[1]), u(g.pad[1])) } else { (1, 0) };
     let (sw, pw) = if f.fw > 1 { (u(g.stride[2]), u(g.pad[2])) } else { (1, 0) };
     let (kh, kw) = (u(f.fh), u(f.fw));
-    let p = Params { n: u(g.n), ci: u(g.ci), id, ih, iw, od, oh, ow, kh, kw, sh, sw, ph, pw, cpad: u(cpad), ..Default::default() };
-    dispatch(gpu, pass, "conv_fast_pack_folded", p, &[Arg::R(x), Arg::W(&out)], g.n * volume(f.g.input))?;
-    Ok(out)
+    Params { n: u(g.n), ci: u(g.ci), id, ih, iw, od, oh, ow, kh, kw, sh, sw, ph, pw, cpad: u(cpad), ..Default::default() }
 }
 
 /// Weights repacked as [tap][cpad][co16 * 16] for the packing parameters `p` (those of the
@@ -152,25 +157,200 @@ fn volume(s: [usize; 3]) -> usize {
     s.iter().product()
 }
 
+/// Where the forward kernels read their packed operands (see the two halves of
+/// `shaders/conv_fast.wgsl`): storage buffers, or textures shared across lanes by subgroup
+/// shuffles (far cheaper loads on lavapipe; needs subgroups of 8).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Operands {
+    /// Channels-last storage buffers, one register tile per invocation.
+    Buffers,
+    /// rgba32f textures, one register tile per subgroup of 8 lanes.
+    Textures,
+}
+
+/// The operands `ConvKernel::Auto` uses on `gpu`: buffers without subgroups of 8; otherwise
+/// `RENDERNET_CONV_OPERANDS` (`buffers` or `textures`) if set, else whichever ran a small conv
+/// (16->16 3^3 on 16^3) faster in a calibration that is cached per adapter, driver and CPU in
+/// `$XDG_CACHE_HOME/rendernet/calibration.txt` (`~/.cache/...`), because which one wins
+/// depends on the driver and the CPU lavapipe runs on (texture fetches vs per-lane buffer
+/// loads). Decided once per device.
+pub(crate) fn calibrated(gpu: &Gpu) -> Operands {
+    let textures = *gpu.conv_textures.get_or_init(|| {
+        if !gpu.has_subgroups_of_8() {
+            return false;
+        }
+        match std::env::var("RENDERNET_CONV_OPERANDS").as_deref() {
+            Ok("buffers") => return false,
+            Ok("textures") => return true,
+            _ => {}
+        }
+        let key = format!(
+            "conv-operands-v1 {} | {} | {} | {}",
+            gpu.info.name,
+            gpu.info.driver,
+            gpu.info.driver_info,
+            crate::bench::cpu_model().unwrap_or_default()
+        )
+        .replace(['\n', '='], " ");
+        let path = cache_file();
+        let cached = path.as_ref().and_then(|p| std::fs::read_to_string(p).ok()).and_then(|text| {
+            text.lines().find_map(|l| l.split_once('=').filter(|(k, _)| *k == key).map(|(_, v)| v == "textures"))
+        });
+        if let Some(t) = cached {
+            return t;
+        }
+        // A failed measurement keeps the buffers, which work everywhere.
+        let t = measure(gpu).unwrap_or(false);
+        if let Some(p) = path {
+            let old = std::fs::read_to_string(&p).unwrap_or_default();
+            let mut lines: Vec<&str> = old.lines().filter(|l| !l.starts_with(&format!("{key}="))).collect();
+            let new = format!("{key}={}", if t { "textures" } else { "buffers" });
+            lines.push(&new);
+            // Best effort, written atomically: a cache that cannot be written costs a re-measure.
+            let tmp = p.with_extension("tmp");
+            if p.parent().is_some_and(|d| std::fs::create_dir_all(d).is_ok()) && std::fs::write(&tmp, lines.join("\n") + "\n").is_ok() {
+                let _ = std::fs::rename(&tmp, &p);
+            }
+        }
+        t
+    });
+    if textures { Operands::Textures } else { Operands::Buffers }
+}
+
+fn cache_file() -> Option<std::path::PathBuf> {
+    let base = std::env::var_os("XDG_CACHE_HOME")
+        .map(std::path::PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| std::path::PathBuf::from(h).join(".cache")))?;
+    Some(base.join("rendernet").join("calibration.txt"))
+}
+
+/// Whether the texture kernels ran the calibration conv faster than the buffer kernels (best
+/// of 3 wall-clock runs each, after a first run that compiles the pipelines).
+fn measure(gpu: &Gpu) -> Result<bool> {
+    let g = Geometry { n: 1, ci: 16, co: 16, input: [16; 3], output: [16; 3], kernel: [3; 3], stride: [1; 3], pad: [1; 3], rank: 5 };
+    let x = Tensor::zeros(gpu, &[1, 16, 16, 16, 16])?;
+    let w = Tensor::zeros(gpu, &[16, 16, 3, 3, 3])?;
+    let y = Tensor::zeros(gpu, &[1, 16, 16, 16, 16])?;
+    let mut best = [f64::INFINITY; 2];
+    for round in 0..4 {
+        for (k, ops) in [Operands::Buffers, Operands::Textures].into_iter().enumerate() {
+            let t = std::time::Instant::now();
+            gpu.run(|pass| forward(gpu, pass, &g, &x, &w, None, &y, ops))?;
+            if round > 0 {
+                best[k] = best[k].min(t.elapsed().as_secs_f64());
+            }
+        }
+    }
+    Ok(best[1] < best[0])
+}
+
+/// A packed operand: a channels-last buffer or an rgba32f texture.
+enum Packed {
+    Buffer(Tensor),
+    Texture(wgpu::TextureView, wgpu::TextureViewDimension),
+}
+
+impl Packed {
+    fn arg(&self) -> Arg<'_> {
+        match self {
+            Packed::Buffer(t) => Arg::R(t),
+            Packed::Texture(v, d) => Arg::Texture(v, *d),
+        }
+    }
+}
+
+/// An rgba32f texture the kernels write as storage and then read, or `None` when `size`
+/// exceeds the device's texture limits (the caller falls back to buffers).
+fn texture(gpu: &Gpu, size: [usize; 3], dim: wgpu::TextureDimension) -> Option<(wgpu::TextureView, wgpu::TextureViewDimension)> {
+    let (limit, view) = match dim {
+        wgpu::TextureDimension::D3 => (gpu.limits.max_texture_dimension_3d, wgpu::TextureViewDimension::D3),
+        _ => (gpu.limits.max_texture_dimension_2d, wgpu::TextureViewDimension::D2),
+    };
+    if size.iter().any(|&v| v == 0 || v > limit as usize) {
+        return None;
+    }
+    let tex = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("conv_fast packed"),
+        size: wgpu::Extent3d { width: size[0] as u32, height: size[1] as u32, depth_or_array_layers: size[2] as u32 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: dim,
+        format: wgpu::TextureFormat::Rgba32Float,
+        usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    });
+    Some((tex.create_view(&Default::default()), view))
+}
+
+/// Whether `ops` can be honoured for a conv whose dispatch geometry is `g` with `cpad`
+/// packed input channels: textures need subgroups of 8 and must fit the texture limits.
+fn textures_fit(gpu: &Gpu, ops: Operands, g: &Geometry, cpad: usize) -> bool {
+    let l = &gpu.limits;
+    let [id, ih, iw] = g.input;
+    ops == Operands::Textures
+        && gpu.has_subgroups_of_8()
+        && iw.max(ih).max(g.n * cpad / 4 * id) <= l.max_texture_dimension_3d as usize
+        && (g.co.div_ceil(16) * 16).max(volume(g.kernel) * cpad / 4) <= l.max_texture_dimension_2d as usize
+}
+
+/// `x` packed as the texture kernels read it (see `conv_fast_pack_input_tex`), or as a buffer.
+fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded, x: &Tensor, cpad: usize, tex: bool) -> Result<Packed> {
+    if !tex {
+        return Ok(Packed::Buffer(pack_folded(gpu, pass, g, f, x, cpad)?));
+    }
+    let [id, ih, iw] = f.g.input;
+    let (view, dim) = texture(gpu, [iw, ih, g.n * cpad / 4 * id], wgpu::TextureDimension::D3).expect("checked by textures_fit");
+    let u = |v: usize| v as u32;
+    let arg = Arg::StorageTexture(&view, dim);
+    if f.fold() == 1 {
+        let p = Params { n: u(g.n), ci: u(g.ci), od: u(id), oh: u(ih), ow: u(iw), cpad: u(cpad), ..Default::default() };
+        dispatch(gpu, pass, "conv_fast_pack_input_tex", p, &[Arg::R(x), arg], g.n * volume(f.g.input))?;
+    } else {
+        let p = folded_params(g, f, cpad);
+        dispatch(gpu, pass, "conv_fast_pack_folded_tex", p, &[Arg::R(x), arg], g.n * volume(f.g.input))?;
+    }
+    Ok(Packed::Texture(view, dim))
+}
+
+/// Weights packed for the packing parameters `p` (see `pack_weights`), as a texture or buffer.
+fn pack_w(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: &Tensor, tex: bool) -> Result<Packed> {
+    if !tex {
+        return Ok(Packed::Buffer(pack_weights(gpu, pass, p, w)?));
+    }
+    let width = p.co16 as usize * 16;
+    let height = (p.kd * p.kh * p.kw) as usize * p.cpad as usize / 4;
+    let (view, dim) = texture(gpu, [width, height, 1], wgpu::TextureDimension::D2).expect("checked by textures_fit");
+    dispatch(gpu, pass, "conv_fast_pack_weights_tex", p, &[Arg::R(w), Arg::StorageTexture(&view, dim)], width * height)?;
+    Ok(Packed::Texture(view, dim))
+}
+
 /// The tiled forward with parameters `p` (of the dispatch geometry, output layout included)
-/// on packed operands: one invocation per 8 outputs along W x 16 output channels.
+/// on packed operands: per invocation 8 outputs along W x 16 output channels (buffers), or
+/// per subgroup of 8 lanes 8 outputs along W x 4 rows x 16 output channels (textures).
 fn forward_packed(
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
     p: Params,
-    xp: &Tensor,
-    wp: &Tensor,
+    xp: &Packed,
+    wp: &Packed,
     b: Option<&Tensor>,
     y: &Tensor,
 ) -> Result<()> {
-    let tiles = (p.n * p.co16 * p.od * p.oh * p.ow.div_ceil(8)) as usize;
     let p = Params { has_bias: b.is_some() as u32, ..p };
     let bias = b.map_or(Arg::Absent, Arg::R);
-    dispatch(gpu, pass, "conv_fast_forward", p, &[Arg::R(xp), Arg::R(wp), bias, Arg::W(y)], tiles)
+    let args = [xp.arg(), wp.arg(), bias, Arg::W(y)];
+    if let Packed::Texture(..) = xp {
+        let tiles = (p.n * p.co16 * p.od * p.oh.div_ceil(4) * p.ow.div_ceil(8)) as usize;
+        let p = Params { total: tiles as u32, ..p };
+        return gpu.dispatch(pass, SHADER, "conv_fast_forward_tex", &p, &args, grid_1d(tiles as u64 * 8, 64)?);
+    }
+    let tiles = (p.n * p.co16 * p.od * p.oh * p.ow.div_ceil(8)) as usize;
+    dispatch(gpu, pass, "conv_fast_forward", p, &args, tiles)
 }
 
 /// Tiled `y = conv(x, w) + b` (any stride and padding), with taps folded into channels
 /// where that fills the channel quads better (few input channels).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn forward(
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
@@ -179,12 +359,14 @@ pub(crate) fn forward(
     w: &Tensor,
     b: Option<&Tensor>,
     y: &Tensor,
+    ops: Operands,
 ) -> Result<()> {
     let f = fold(g, 4);
     let cpad = f.g.ci.div_ceil(4) * 4;
-    let xp = pack_folded(gpu, pass, g, &f, x, cpad)?;
+    let tex = textures_fit(gpu, ops, &f.g, cpad);
+    let xp = pack_x(gpu, pass, g, &f, x, cpad, tex)?;
     let p = params(&f.g, cpad);
-    let wp = pack_weights(gpu, pass, Params { fold: f.fold() as u32, ..p }, w)?;
+    let wp = pack_w(gpu, pass, Params { fold: f.fold() as u32, ..p }, w, tex)?;
     forward_packed(gpu, pass, p, &xp, &wp, b, y)
 }
 
@@ -209,6 +391,7 @@ fn phase(r: usize, input: usize, k: usize, s: usize, pad: usize) -> Phase {
 /// Tiled `dx = conv^T(dy, w) (+ b)`: per output phase (one at stride 1), a stride-1 forward
 /// conv of the packed dy with that phase's flipped, channel-swapped sub-kernel, writing every
 /// stride-th dx value.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn backward_input(
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
@@ -217,9 +400,14 @@ pub(crate) fn backward_input(
     w: &Tensor,
     b: Option<&Tensor>,
     dx: &Tensor,
+    ops: Operands,
 ) -> Result<()> {
     let cpad = g.co.div_ceil(4) * 4;
-    let dyp = pack_input(gpu, pass, dy, g.n, g.co, g.output, cpad)?;
+    // The dispatch geometry's input is dy; its kernel at most the whole kernel.
+    let whole = Geometry { ci: g.co, co: g.ci, input: g.output, output: g.input, stride: [1; 3], pad: [0; 3], ..*g };
+    let tex = textures_fit(gpu, ops, &whole, cpad);
+    let unfolded = Folded { g: whole, fh: 1, fw: 1 };
+    let dyp = pack_x(gpu, pass, &whole, &unfolded, dy, cpad, tex)?;
     let [_, fh, fw] = g.input;
     let [sd, sh, sw] = g.stride;
     for i in 0..volume(g.stride) {
@@ -244,7 +432,7 @@ pub(crate) fn backward_input(
         let [pd, ph_, pw] = ph.each_ref().map(|q| u(q.k0));
         let step = g.stride.map(u);
         let pack = Params { flip: 1, id, ih, iw, sd: step[0], sh: step[1], sw: step[2], pd, ph: ph_, pw, ..base };
-        let wp = pack_weights(gpu, pass, pack, w)?;
+        let wp = pack_w(gpu, pass, pack, w, tex)?;
         // Negative pads travel as two's complement; the shader reads them back with i32().
         let [pd, ph_, pw] = ph.each_ref().map(|q| q.pad as i32 as u32);
         let p = Params {
@@ -263,6 +451,39 @@ pub(crate) fn backward_input(
     Ok(())
 }
 
+/// `backward_weight` on textures (see `conv_fast_backward_weight_tex`).
+#[allow(clippy::too_many_arguments)]
+fn backward_weight_tex(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    f: &Folded,
+    x: &Tensor,
+    dy: &Tensor,
+    dw: &Tensor,
+    cpad: usize,
+    copad: usize,
+) -> Result<()> {
+    let xp = pack_x(gpu, pass, g, f, x, cpad, true)?;
+    let dy_geom = Geometry { ci: g.co, input: g.output, ..*g };
+    let dyp = pack_x(gpu, pass, &dy_geom, &Folded { g: dy_geom, fh: 1, fw: 1 }, dy, copad, true)?;
+    let g = &f.g;
+    let taps = volume(g.kernel);
+    let groups = (taps * cpad / 4).div_ceil(8) * (copad / 16);
+    // Chunks of output rows: enough tiles for ~16 workgroups of 8 (lavapipe spreads
+    // workgroups over its threads), never more chunks than rows.
+    let rows = g.n * g.output[0] * g.output[1];
+    let nchunks = 128usize.div_ceil(groups).clamp(1, rows);
+    let chunk = rows.div_ceil(nchunks);
+    let nchunks = rows.div_ceil(chunk);
+    let part = Tensor::zeros(gpu, &[nchunks, taps, cpad, copad])?;
+    let tiles = nchunks * groups;
+    let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, total: tiles as u32, ..params(g, cpad) };
+    let args = [xp.arg(), dyp.arg(), Arg::W(&part)];
+    gpu.dispatch(pass, SHADER, "conv_fast_backward_weight_tex", &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
+    dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
+}
+
 /// Tiled `dw[co, ci, k] = Σ dy[n, co, o] x[n, ci, o*s - pad + k]`: partial sums per chunk of
 /// output rows, then a fixed-order sum over chunks (deterministic, no atomics).
 pub(crate) fn backward_weight(
@@ -272,7 +493,16 @@ pub(crate) fn backward_weight(
     x: &Tensor,
     dy: &Tensor,
     dw: &Tensor,
+    ops: Operands,
 ) -> Result<()> {
+    let f = fold(g, 4);
+    let cpad = f.g.ci.div_ceil(4) * 4;
+    let copad = g.co.div_ceil(16) * 16;
+    // dy is read as the texture kernels' input: a geometry with dy's channels and extent.
+    let dy_geom = Geometry { ci: g.co, input: g.output, ..f.g };
+    if textures_fit(gpu, ops, &f.g, cpad) && textures_fit(gpu, ops, &dy_geom, copad) {
+        return backward_weight_tex(gpu, pass, g, &f, x, dy, dw, cpad, copad);
+    }
     let f = fold(g, 8);
     let (cpad, copad) = (f.g.ci.div_ceil(8) * 8, g.co.div_ceil(16) * 16);
     let xp = pack_folded(gpu, pass, g, &f, x, cpad)?;
