@@ -91,7 +91,7 @@ pub fn forward_with(
     expect_shape("projection", "output", y, &d.output_shape())?;
     let g = d.geometry();
     if conv::use_fast(kernel, Pass::Forward, &g) {
-        return conv::dispatch_forward(ConvKernel::Fast, gpu, pass, &g, x, w, Some(b), y);
+        return conv::dispatch_forward(kernel, gpu, pass, &g, x, w, Some(b), y);
     }
     let args = [Arg::R(x), Arg::R(w), Arg::R(b), Arg::W(y)];
     gpu.dispatch(pass, SHADER, "projection_forward", &d.params(), &args, grid_1d(y.numel() as u64, 64)?)
@@ -115,7 +115,7 @@ pub fn backward_input_with(
     expect_shape("projection", "dy", dy, &d.output_shape())?;
     let g = d.geometry();
     if conv::use_fast(kernel, Pass::BackwardInput, &g) {
-        return conv::dispatch_backward_input(ConvKernel::Fast, gpu, pass, &g, dy, w, None, dx);
+        return conv::dispatch_backward_input(kernel, gpu, pass, &g, dy, w, None, dx);
     }
     let args = [Arg::R(dy), Arg::R(w), Arg::W(dx)];
     gpu.dispatch(pass, SHADER, "projection_backward_input", &d.params(), &args, grid_1d(dx.numel() as u64, 64)?)
@@ -139,7 +139,7 @@ pub fn backward_weight_with(
     expect_shape("projection", "dy", dy, &d.output_shape())?;
     let g = d.geometry();
     if conv::use_fast(kernel, Pass::BackwardWeight, &g) {
-        return conv::dispatch_backward_weight(ConvKernel::Fast, gpu, pass, &g, x, dy, dw);
+        return conv::dispatch_backward_weight(kernel, gpu, pass, &g, x, dy, dw);
     }
     let args = [Arg::R(x), Arg::R(dy), Arg::W(dw)];
     gpu.dispatch(pass, SHADER, "projection_backward_weight", &d.params(), &args, grid_1d(dw.numel() as u64, 64)?)
