@@ -420,28 +420,10 @@ fn tex_pos(n: u32, q: u32, d: u32, h: u32, w: u32) -> vec3<u32> {
     return vec3<u32>(w, h, (n * (p.cpad / 4u) + q) * p.od + d);
 }
 
-// Same parameters as conv_fast_pack_input (binding 1 is the source buffer `src` there).
+// Same parameters as conv_fast_pack_folded (binding 1 is its source buffer `src`); with fold
+// sizes 1 (kh = kw = 1, stride 1, no padding) it is the plain channels-last packing.
 @group(0) @binding(2) var tdst: texture_storage_3d<rgba32float, write>;
 
-@compute @workgroup_size(64)
-fn conv_fast_pack_input_tex(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let i = lin(gid, nwg);
-    if (i >= p.total) { return; }
-    let s_len = p.od * p.oh * p.ow;
-    let n = i / s_len;
-    let s = i % s_len;
-    let w = s % p.ow;
-    let h = (s / p.ow) % p.oh;
-    let d = s / (p.ow * p.oh);
-    for (var q = 0u; q < p.cpad / 4u; q++) {
-        let c = 4u * q;
-        let v = vec4<f32>(src_at(n, c, s, s_len, true), src_at(n, c + 1u, s, s_len, true),
-                          src_at(n, c + 2u, s, s_len, true), src_at(n, c + 3u, s, s_len, true));
-        textureStore(tdst, tex_pos(n, q, d, h, w), v);
-    }
-}
-
-// Same parameters as conv_fast_pack_folded.
 @compute @workgroup_size(64)
 fn conv_fast_pack_folded_tex(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = lin(gid, nwg);
@@ -511,14 +493,27 @@ fn put_row(n: u32, co: u32, pos: u32, ow: u32, oh: u32, a: Acc) {
     put(n, co + 8u, pos, ow, a.a2); put(n, co + 12u, pos, ow, a.a3);
 }
 
+// (tile, lane, base): a tile is 8 lanes, a workgroup's tiles its 8 groups of 8 invocations;
+// `lane` is the position in the tile and `base` the subgroup id of its lane 0 (shuffles
+// address base + j).
+struct LaneIds {
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) li: u32,
+    @builtin(subgroup_invocation_id) sid: u32,
+}
+
+fn lane_tile(i: LaneIds) -> vec3<u32> {
+    return vec3<u32>((i.wg.x + i.wg.y * i.nwg.x) * 8u + i.li / 8u, i.sid & 7u, i.sid & ~7u);
+}
+
 @compute @workgroup_size(64)
-fn conv_fast_forward_tex(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
-                         @builtin(local_invocation_index) li: u32, @builtin(subgroup_invocation_id) sid: u32) {
-    // Tile = 8 lanes; tiles of one workgroup are its 8 groups of 8 invocations.
-    let t = (wg.x + wg.y * nwg.x) * 8u + li / 8u;
+fn conv_fast_forward_tex(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    let t = tl.x;
     if (t >= p.total) { return; }
-    let lane = sid & 7u;
-    let base = sid & ~7u;
+    let lane = tl.y;
+    let base = tl.z;
     let wblocks = (p.ow + 7u) / 8u;
     let hblocks = (p.oh + 3u) / 4u;
     var r = t;
@@ -607,12 +602,12 @@ fn bw_x(n: u32, q: u32, zd: i32, zh: i32, zw: i32) -> vec4<f32> {
 }
 
 @compute @workgroup_size(64)
-fn conv_fast_backward_weight_tex(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
-                                 @builtin(local_invocation_index) li: u32, @builtin(subgroup_invocation_id) sid: u32) {
-    let t = (wg.x + wg.y * nwg.x) * 8u + li / 8u;
+fn conv_fast_backward_weight_tex(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    let t = tl.x;
     if (t >= p.total) { return; }
-    let lane = sid & 7u;
-    let base = sid & ~7u;
+    let lane = tl.y;
+    let base = tl.z;
     let taps = p.kd * p.kh * p.kw;
     let cq = p.cpad / 4u;
     let groups = (taps * cq + 7u) / 8u;

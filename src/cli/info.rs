@@ -16,5 +16,15 @@ pub fn run() -> rendernet::Result<()> {
     println!("max_compute_workgroup_storage_size: {} KiB", l.max_compute_workgroup_storage_size >> 10);
     println!("max_storage_buffers_per_shader_stage: {}", l.max_storage_buffers_per_shader_stage);
     println!("timestamp queries: {}", if gpu.has_timestamps() { "yes (inside passes)" } else { "no" });
+    println!("max_texture_dimension_2d / 3d: {} / {}", l.max_texture_dimension_2d, l.max_texture_dimension_3d);
+    println!(
+        "subgroups: {} ({}..{} lanes)",
+        if gpu.features.contains(wgpu::Features::SUBGROUP) { "yes" } else { "no" },
+        i.subgroup_min_size,
+        i.subgroup_max_size
+    );
+    if let Some(cpu) = rendernet::bench::cpu_model() {
+        println!("cpu:      {cpu}");
+    }
     Ok(())
 }

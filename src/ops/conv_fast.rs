@@ -300,15 +300,10 @@ fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded,
     }
     let [id, ih, iw] = f.g.input;
     let (view, dim) = texture(gpu, [iw, ih, g.n * cpad / 4 * id], wgpu::TextureDimension::D3).expect("checked by textures_fit");
-    let u = |v: usize| v as u32;
-    let arg = Arg::StorageTexture(&view, dim);
-    if f.fold() == 1 {
-        let p = Params { n: u(g.n), ci: u(g.ci), od: u(id), oh: u(ih), ow: u(iw), cpad: u(cpad), ..Default::default() };
-        dispatch(gpu, pass, "conv_fast_pack_input_tex", p, &[Arg::R(x), arg], g.n * volume(f.g.input))?;
-    } else {
-        let p = folded_params(g, f, cpad);
-        dispatch(gpu, pass, "conv_fast_pack_folded_tex", p, &[Arg::R(x), arg], g.n * volume(f.g.input))?;
-    }
+    // Without a fold the folded packing's parameters make it the plain packing.
+    let p = folded_params(g, f, cpad);
+    let args = [Arg::R(x), Arg::StorageTexture(&view, dim)];
+    dispatch(gpu, pass, "conv_fast_pack_folded_tex", p, &args, g.n * volume(f.g.input))?;
     Ok(Packed::Texture(view, dim))
 }
 
