@@ -1,5 +1,7 @@
 // Tiled convolution kernels (implicit GEMM, never materialising im2col), the fast path behind
-// src/ops/conv.rs; shaders/conv.wgsl keeps the one-output-per-invocation reference kernels
+// src/ops/conv.rs, in two families: the first half reads channels-last storage buffers (one
+// register tile per invocation), the second half ("Texture kernels" below) reads textures and
+// shares fetched values across a subgroup's lanes; shaders/conv.wgsl keeps the one-output-per-invocation reference kernels
 // that the tests treat as the oracle. A separate module because these entry points share a
 // different parameter block and scratch layouts (channels-last, padded) with each other and
 // nothing with the reference kernels.

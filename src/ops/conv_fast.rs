@@ -1,7 +1,7 @@
 //! The tiled conv kernels of `shaders/conv_fast.wgsl` (see its header for the tiling and why
-//! it suits lavapipe), behind `conv::dispatch_*`. Each call repacks its operands into
-//! channels-last scratch tensors first (a memory-bound pass, a few percent of the FLOPs'
-//! time), so callers keep PyTorch layouts.
+//! it suits lavapipe), behind `conv::dispatch_*`, in two families chosen by [`Operands`]:
+//! storage buffers, or textures shared across a subgroup. Each call repacks its operands
+//! (channels-last buffers or rgba32f textures) first, so callers keep PyTorch layouts.
 
 use super::conv::Geometry;
 use crate::error::Result;
