@@ -8,6 +8,11 @@ use crate::error::Result;
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
 
 const SHADER: Shader = Shader { name: "conv_fast", source: include_str!("../../shaders/conv_fast.wgsl") };
+/// The texture family: `conv_tex.wgsl` uses `conv_fast.wgsl`'s parameters and helpers.
+const TEX_SHADER: Shader = Shader {
+    name: "conv_tex",
+    source: concat!(include_str!("../../shaders/conv_fast.wgsl"), include_str!("../../shaders/conv_tex.wgsl")),
+};
 
 /// Mirrors `Params` in `shaders/conv_fast.wgsl`.
 #[repr(C)]
@@ -72,7 +77,8 @@ fn params(g: &Geometry, cpad: usize) -> Params {
 
 fn dispatch(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, entry: &'static str, mut p: Params, args: &[Arg], total: usize) -> Result<()> {
     p.total = total as u32;
-    gpu.dispatch(pass, SHADER, entry, &p, args, grid_1d(total as u64, 64)?)
+    let shader = if entry.ends_with("_tex") { TEX_SHADER } else { SHADER };
+    gpu.dispatch(pass, shader, entry, &p, args, grid_1d(total as u64, 64)?)
 }
 
 /// `t` ([N, c, sp...]) repacked channels-last as [N, sp..., cpad], channels past `c` zero.
@@ -337,7 +343,7 @@ fn forward_packed(
     if let Packed::Texture(..) = xp {
         let tiles = (p.n * p.co16 * p.od * p.oh.div_ceil(4) * p.ow.div_ceil(8)) as usize;
         let p = Params { total: tiles as u32, ..p };
-        return gpu.dispatch(pass, SHADER, "conv_fast_forward_tex", &p, &args, grid_1d(tiles as u64 * 8, 64)?);
+        return gpu.dispatch(pass, TEX_SHADER, "conv_fast_forward_tex", &p, &args, grid_1d(tiles as u64 * 8, 64)?);
     }
     let tiles = (p.n * p.co16 * p.od * p.oh * p.ow.div_ceil(8)) as usize;
     dispatch(gpu, pass, "conv_fast_forward", p, &args, tiles)
@@ -475,7 +481,7 @@ fn backward_weight_tex(
     let tiles = nchunks * groups;
     let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, total: tiles as u32, ..params(g, cpad) };
     let args = [xp.arg(), dyp.arg(), Arg::W(&part)];
-    gpu.dispatch(pass, SHADER, "conv_fast_backward_weight_tex", &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
+    gpu.dispatch(pass, TEX_SHADER, "conv_fast_backward_weight_tex", &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
     dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
 }
 

@@ -1,0 +1,272 @@
+// prepend: conv_fast.wgsl
+// The texture family of the tiled conv kernels: operands read through textures, shared
+// across lanes by subgroup shuffles. Compiled appended to conv_fast.wgsl (src/ops/conv_fast.rs
+// builds the module from both), whose parameter block, packing helpers (src_at, folded_at,
+// packed_weight) and output writer (put) it uses.
+//
+// Why (measured on lavapipe 22.3 / LLVM 15, `rendernet bench`, see README "Benchmarks"):
+// llvmpipe turns every storage-buffer load, even one whose address is the same in all 8 SIMD
+// lanes, into a loop over the lanes with a branch per lane (~200 cycles per 8-lane vector on
+// AMD Zen 3), whereas a texel fetch is one gather (~60 cycles for an rgba32f texel, i.e. 4
+// vectors) and a subgroup shuffle is a register permute (~1 cycle). So these kernels put the
+// packed activations in a 3D rgba32f texture (texel = 4 channels of one voxel) and the packed
+// weights in a 2D rgba32f texture, map the 8 lanes of a subgroup to 8 consecutive outputs
+// along W, and let each lane fetch a different weight texel and hand it to the others with
+// subgroupShuffle instead of every lane fetching every weight. Requires subgroups of a
+// multiple of 8 lanes whose ids follow local_invocation_index (src/ops/conv_fast.rs checks).
+//
+// Activation texture: texel (w, h, (n * cq + q) * D + d) = channels 4q..4q+3 of voxel
+// (n, d, h, w), cq = cpad / 4. Weight texture: texel (cg * 16 + ci_in * 4 + o4, tap * cq + q)
+// = output channels cg*16 + 4*o4 + 0..3 of input channel 4q + ci_in at `tap`.
+fn tex_pos(n: u32, q: u32, d: u32, h: u32, w: u32) -> vec3<u32> {
+    return vec3<u32>(w, h, (n * (p.cpad / 4u) + q) * p.od + d);
+}
+
+// Same parameters as conv_fast_pack_folded (binding 1 is its source buffer `src`); with fold
+// sizes 1 (kh = kw = 1, stride 1, no padding) it is the plain channels-last packing.
+@group(0) @binding(2) var tdst: texture_storage_3d<rgba32float, write>;
+
+@compute @workgroup_size(64)
+fn conv_fast_pack_folded_tex(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = lin(gid, nwg);
+    if (i >= p.total) { return; }
+    let dst_len = p.od * p.oh * p.ow;
+    let n = i / dst_len;
+    let s = i % dst_len;
+    let w = s % p.ow;
+    let h = (s / p.ow) % p.oh;
+    let d = s / (p.ow * p.oh);
+    let w0 = i32(w * p.sw) - i32(p.pw);
+    let h0 = i32(h * p.sh) - i32(p.ph);
+    for (var q = 0u; q < p.cpad / 4u; q++) {
+        let c = 4u * q;
+        let v = vec4<f32>(folded_at(n, c, d, h0, w0), folded_at(n, c + 1u, d, h0, w0),
+                          folded_at(n, c + 2u, d, h0, w0), folded_at(n, c + 3u, d, h0, w0));
+        textureStore(tdst, tex_pos(n, q, d, h, w), v);
+    }
+}
+
+// Same parameters as conv_fast_pack_weights; one invocation per texel.
+@group(0) @binding(2) var twdst: texture_storage_2d<rgba32float, write>;
+
+@compute @workgroup_size(64)
+fn conv_fast_pack_weights_tex(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = lin(gid, nwg);
+    if (i >= p.total) { return; }
+    let width = p.co16 * 16u;
+    let x = i % width;
+    let y = i / width;
+    let q = y % (p.cpad / 4u);
+    let tap = y / (p.cpad / 4u);
+    let c = 4u * q + (x % 16u) / 4u;
+    let o = (x / 16u) * 16u + (x % 4u) * 4u;
+    let v = vec4<f32>(packed_weight(tap, c, o), packed_weight(tap, c, o + 1u),
+                      packed_weight(tap, c, o + 2u), packed_weight(tap, c, o + 3u));
+    textureStore(twdst, vec2<u32>(x, y), v);
+}
+
+// ---- forward: a subgroup of 8 lanes = 8 outputs along W; each lane 4 rows (H) x 16 channels --
+@group(0) @binding(1) var tx: texture_3d<f32>;
+@group(0) @binding(2) var tw: texture_2d<f32>;
+
+// Activation texel of channel quad `q` at input (zd, zh, zw) of item n, zero off the grid.
+fn tex_x(n: u32, q: u32, zd: u32, zh: i32, zw: i32) -> vec4<f32> {
+    let inside = zh >= 0 && zh < i32(p.ih) && zw >= 0 && zw < i32(p.iw);
+    let c = vec3<i32>(clamp(zw, 0, i32(p.iw) - 1), clamp(zh, 0, i32(p.ih) - 1), i32((n * (p.cpad / 4u) + q) * p.id + zd));
+    return select(vec4<f32>(0.0), textureLoad(tx, c, 0), inside);
+}
+
+// One row's 16 accumulators += x (4 input channels) times the broadcast weights.
+struct Acc { a0: vec4<f32>, a1: vec4<f32>, a2: vec4<f32>, a3: vec4<f32> }
+struct W16 { w: array<vec4<f32>, 16> }
+
+fn mac(acc: Acc, x: vec4<f32>, w: W16) -> Acc {
+    var r = acc;
+    r.a0 += x.x * w.w[0] + x.y * w.w[4] + x.z * w.w[8] + x.w * w.w[12];
+    r.a1 += x.x * w.w[1] + x.y * w.w[5] + x.z * w.w[9] + x.w * w.w[13];
+    r.a2 += x.x * w.w[2] + x.y * w.w[6] + x.z * w.w[10] + x.w * w.w[14];
+    r.a3 += x.x * w.w[3] + x.y * w.w[7] + x.z * w.w[11] + x.w * w.w[15];
+    return r;
+}
+
+fn put_row(n: u32, co: u32, pos: u32, ow: u32, oh: u32, a: Acc) {
+    if (oh >= p.oh) { return; }
+    put(n, co, pos, ow, a.a0); put(n, co + 4u, pos, ow, a.a1);
+    put(n, co + 8u, pos, ow, a.a2); put(n, co + 12u, pos, ow, a.a3);
+}
+
+// (tile, lane, base): a tile is 8 lanes, a workgroup's tiles its 8 groups of 8 invocations;
+// `lane` is the position in the tile and `base` the subgroup id of its lane 0 (shuffles
+// address base + j).
+struct LaneIds {
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) li: u32,
+    @builtin(subgroup_invocation_id) sid: u32,
+}
+
+fn lane_tile(i: LaneIds) -> vec3<u32> {
+    return vec3<u32>((i.wg.x + i.wg.y * i.nwg.x) * 8u + i.li / 8u, i.sid & 7u, i.sid & ~7u);
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_forward_tex(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    let t = tl.x;
+    if (t >= p.total) { return; }
+    let lane = tl.y;
+    let base = tl.z;
+    let wblocks = (p.ow + 7u) / 8u;
+    let hblocks = (p.oh + 3u) / 4u;
+    var r = t;
+    let wb = r % wblocks; r /= wblocks;
+    let hb = r % hblocks; r /= hblocks;
+    let od = r % p.od; r /= p.od;
+    let cg = r % p.co16;
+    let n = r / p.co16;
+    let ow = wb * 8u + lane;
+    let oh0 = hb * 4u;
+    let cq = p.cpad / 4u;
+    var a0 = Acc(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    var a1 = a0; var a2 = a0; var a3 = a0;
+    for (var kd = 0u; kd < p.kd; kd++) {
+        let zd = i32(od * p.sd + kd) - i32(p.pd);
+        if (zd < 0 || zd >= i32(p.id)) { continue; }
+        for (var kh = 0u; kh < p.kh; kh++) {
+            let zh = i32(oh0 * p.sh + kh) - i32(p.ph);
+            let zsh = i32(p.sh);
+            for (var kw = 0u; kw < p.kw; kw++) {
+                let zw = i32(ow * p.sw + kw) - i32(p.pw);
+                let tap = (kd * p.kh + kh) * p.kw + kw;
+                for (var q = 0u; q < cq; q++) {
+                    // Lane l fetches weight texels l and 8 + l of this (tap, q, cg): input
+                    // channel l / 4 (then 2 + l / 4), output quad l % 4.
+                    let wy = i32(tap * cq + q);
+                    let wa = textureLoad(tw, vec2<i32>(i32(cg * 16u + lane), wy), 0);
+                    let wv = textureLoad(tw, vec2<i32>(i32(cg * 16u + 8u + lane), wy), 0);
+                    // Written out: llvmpipe does not unroll loops, and a loop-indexed array
+                    // would live in memory.
+                    let w = W16(array<vec4<f32>, 16>(
+                        subgroupShuffle(wa, base), subgroupShuffle(wa, base + 1u), subgroupShuffle(wa, base + 2u), subgroupShuffle(wa, base + 3u),
+                        subgroupShuffle(wa, base + 4u), subgroupShuffle(wa, base + 5u), subgroupShuffle(wa, base + 6u), subgroupShuffle(wa, base + 7u),
+                        subgroupShuffle(wv, base), subgroupShuffle(wv, base + 1u), subgroupShuffle(wv, base + 2u), subgroupShuffle(wv, base + 3u),
+                        subgroupShuffle(wv, base + 4u), subgroupShuffle(wv, base + 5u), subgroupShuffle(wv, base + 6u), subgroupShuffle(wv, base + 7u)));
+                    a0 = mac(a0, tex_x(n, q, u32(zd), zh, zw), w);
+                    a1 = mac(a1, tex_x(n, q, u32(zd), zh + zsh, zw), w);
+                    a2 = mac(a2, tex_x(n, q, u32(zd), zh + 2 * zsh, zw), w);
+                    a3 = mac(a3, tex_x(n, q, u32(zd), zh + 3 * zsh, zw), w);
+                }
+            }
+        }
+    }
+    if (ow >= p.ow) { return; }
+    let pos = p.yoff + od * p.ysd + oh0 * p.ysh + ow * p.ysw;
+    let co = cg * 16u;
+    put_row(n, co, pos, ow, oh0, a0);
+    put_row(n, co, pos + p.ysh, ow, oh0 + 1u, a1);
+    put_row(n, co, pos + 2u * p.ysh, ow, oh0 + 2u, a2);
+    put_row(n, co, pos + 3u * p.ysh, ow, oh0 + 3u, a3);
+}
+
+// ---- backward weight: lanes = 8 (tap, input channel quad) pairs; dy shared by shuffles ----
+// One subgroup of 8 lanes per (group of 8 pairs, output channel group of 16, chunk of output
+// rows). Lane L owns pair L = tap * cq + q and accumulates dw[16 channels][4 channels] of it
+// over the chunk's positions: per output position it fetches its x texel at the position its
+// tap reaches, while the 16 dy values of that position (the same for every lane) come from
+// texels the 8 lanes fetched for 8 positions at once, handed around with subgroupShuffle.
+// Writes part[chunk][tap][cpad][copad] like conv_fast_backward_weight; conv_fast_weight_sum
+// adds the chunks. Params: the (folded) dispatch geometry; cpad of x, co16 of dy; nchunks,
+// chunk (rows per chunk), total = tiles.
+@group(0) @binding(1) var bx: texture_3d<f32>;    // packed x (as tx)
+@group(0) @binding(2) var bdy: texture_3d<f32>;   // packed dy: quads co16 * 4 per item
+@group(0) @binding(3) var<storage, read_write> bpart: array<f32>;
+
+struct Acc16 { a: array<vec4<f32>, 16> }
+
+// acc[o] += dy[o] * x for the 16 output channels of the position held by lane `j` of the
+// group (g0..g3: its dy texels).
+fn bw_step(acc: Acc16, x: vec4<f32>, g0: vec4<f32>, g1: vec4<f32>, g2: vec4<f32>, g3: vec4<f32>, j: u32) -> Acc16 {
+    let d0 = subgroupShuffle(g0, j); let d1 = subgroupShuffle(g1, j);
+    let d2 = subgroupShuffle(g2, j); let d3 = subgroupShuffle(g3, j);
+    var r = acc;
+    r.a[0] += d0.x * x; r.a[1] += d0.y * x; r.a[2] += d0.z * x; r.a[3] += d0.w * x;
+    r.a[4] += d1.x * x; r.a[5] += d1.y * x; r.a[6] += d1.z * x; r.a[7] += d1.w * x;
+    r.a[8] += d2.x * x; r.a[9] += d2.y * x; r.a[10] += d2.z * x; r.a[11] += d2.w * x;
+    r.a[12] += d3.x * x; r.a[13] += d3.y * x; r.a[14] += d3.z * x; r.a[15] += d3.w * x;
+    return r;
+}
+
+fn bw_x(n: u32, q: u32, zd: i32, zh: i32, zw: i32) -> vec4<f32> {
+    let inside = zd >= 0 && zd < i32(p.id) && zh >= 0 && zh < i32(p.ih) && zw >= 0 && zw < i32(p.iw);
+    let c = vec3<i32>(clamp(zw, 0, i32(p.iw) - 1), clamp(zh, 0, i32(p.ih) - 1),
+                      i32((n * (p.cpad / 4u) + q) * p.id) + clamp(zd, 0, i32(p.id) - 1));
+    return select(vec4<f32>(0.0), textureLoad(bx, c, 0), inside);
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_backward_weight_tex(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    let t = tl.x;
+    if (t >= p.total) { return; }
+    let lane = tl.y;
+    let base = tl.z;
+    let taps = p.kd * p.kh * p.kw;
+    let cq = p.cpad / 4u;
+    let groups = (taps * cq + 7u) / 8u;
+    var r = t;
+    let grp = r % groups; r /= groups;
+    let cg = r % p.co16;
+    let chunk = r / p.co16;
+    let pair = grp * 8u + lane;
+    let live = pair < taps * cq;
+    let tap = min(pair / cq, taps - 1u);
+    let q = pair % cq;
+    let kw = tap % p.kw;
+    let kh = (tap / p.kw) % p.kh;
+    let kd = tap / (p.kw * p.kh);
+    let rows = p.n * p.od * p.oh;
+    let begin = chunk * p.chunk;
+    let end = min(begin + p.chunk, rows);
+    let dq = p.co16 * 4u;   // dy texels per voxel
+    var acc: Acc16;
+    for (var row = begin; row < end; row++) {
+        let oh = row % p.oh;
+        let od = (row / p.oh) % p.od;
+        let n = row / (p.oh * p.od);
+        let zd = i32(od * p.sd + kd) - i32(p.pd);
+        let zh = i32(oh * p.sh + kh) - i32(p.ph);
+        let dz = i32((n * dq + cg * 4u) * p.od + od);
+        for (var ow0 = 0u; ow0 < p.ow; ow0 += 8u) {
+            // Lane l fetches the 16 dy values at ow0 + l (zero past the row's end).
+            let mine = ow0 + lane;
+            let ok = mine < p.ow;
+            let dc = vec3<i32>(i32(min(mine, p.ow - 1u)), i32(oh), dz);
+            let od_ = i32(p.od);
+            let g0 = select(vec4<f32>(0.0), textureLoad(bdy, dc, 0), ok);
+            let g1 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, od_), 0), ok);
+            let g2 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, 2 * od_), 0), ok);
+            let g3 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, 3 * od_), 0), ok);
+            let zw = i32(ow0 * p.sw + kw) - i32(p.pw);
+            let s = i32(p.sw);
+            // Written out: llvmpipe does not unroll loops.
+            acc = bw_step(acc, bw_x(n, q, zd, zh, zw), g0, g1, g2, g3, base);
+            acc = bw_step(acc, bw_x(n, q, zd, zh, zw + s), g0, g1, g2, g3, base + 1u);
+            acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 2 * s), g0, g1, g2, g3, base + 2u);
+            acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 3 * s), g0, g1, g2, g3, base + 3u);
+            acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 4 * s), g0, g1, g2, g3, base + 4u);
+            acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 5 * s), g0, g1, g2, g3, base + 5u);
+            acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 6 * s), g0, g1, g2, g3, base + 6u);
+            acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 7 * s), g0, g1, g2, g3, base + 7u);
+        }
+    }
+    if (!live) { return; }
+    let copad = p.co16 * 16u;
+    let o = ((chunk * taps + tap) * p.cpad + 4u * q) * copad + cg * 16u;
+    for (var k = 0u; k < 16u; k++) {
+        let v = acc.a[k];
+        bpart[o + k] = v.x;
+        bpart[o + copad + k] = v.y;
+        bpart[o + 2u * copad + k] = v.z;
+        bpart[o + 3u * copad + k] = v.w;
+    }
+}
