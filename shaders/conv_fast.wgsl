@@ -108,6 +108,14 @@ fn folded_at(n: u32, c: u32, d: u32, h0: i32, w0: i32) -> f32 {
     return select(0.0, v, ok);
 }
 
+// Folded channels 4q..4q+3 of destination voxel (n, d) whose folded window starts at
+// (h0, w0); also used by conv_tex.wgsl's texture packing.
+fn folded_quad(n: u32, q: u32, d: u32, h0: i32, w0: i32) -> vec4<f32> {
+    let c = 4u * q;
+    return vec4<f32>(folded_at(n, c, d, h0, w0), folded_at(n, c + 1u, d, h0, w0),
+                     folded_at(n, c + 2u, d, h0, w0), folded_at(n, c + 3u, d, h0, w0));
+}
+
 @compute @workgroup_size(64)
 fn conv_fast_pack_folded(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = lin(gid, nwg);
@@ -120,9 +128,7 @@ fn conv_fast_pack_folded(@builtin(global_invocation_id) gid: vec3<u32>, @builtin
     let d = s / (p.ow * p.oh);
     let cq = p.cpad / 4u;
     for (var q = 0u; q < cq; q++) {
-        let c = 4u * q;
-        dst[i * cq + q] = vec4<f32>(folded_at(n, c, d, h0, w0), folded_at(n, c + 1u, d, h0, w0),
-                                    folded_at(n, c + 2u, d, h0, w0), folded_at(n, c + 3u, d, h0, w0));
+        dst[i * cq + q] = folded_quad(n, q, d, h0, w0);
     }
 }
 
@@ -290,6 +296,17 @@ fn conv_fast_forward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
     put(n, co, pos + 7u * ys, ow0 + 7u, a70); put(n, co + 4u, pos + 7u * ys, ow0 + 7u, a71); put(n, co + 8u, pos + 7u * ys, ow0 + 7u, a72); put(n, co + 12u, pos + 7u * ys, ow0 + 7u, a73);
 }
 
+// (kd, kh, kw) of a flat tap index.
+fn tap_axes(tap: u32) -> vec3<u32> {
+    return vec3<u32>(tap / (p.kw * p.kh), (tap / p.kw) % p.kh, tap % p.kw);
+}
+
+// [begin, end) of the output rows (n, od, oh) in weight-gradient chunk `chunk`.
+fn chunk_rows(chunk: u32) -> vec2<u32> {
+    let begin = chunk * p.chunk;
+    return vec2<u32>(begin, min(begin + p.chunk, p.n * p.od * p.oh));
+}
+
 // ---- backward weight: partial sums over a chunk of output positions -------------------------
 // One invocation per (chunk, tap, group of 8 input channels, group of 16 output channels):
 // dw[co, ci, tap] += dy[n, co, o] * x[n, ci, o*stride - pad + tap] over its positions, written
@@ -310,15 +327,16 @@ fn conv_fast_backward_weight(@builtin(global_invocation_id) gid: vec3<u32>, @bui
     let g8 = r % c8; r /= c8;
     let tap = r % taps;
     let chunk = r / taps;
-    let kw = tap % p.kw;
-    let kh = (tap / p.kw) % p.kh;
-    let kd = tap / (p.kw * p.kh);
+    let k = tap_axes(tap);
+    let kd = k.x;
+    let kh = k.y;
+    let kw = k.z;
     // Chunks are runs of output rows (n, od, oh); within a row the taps that land inside the
     // input are a contiguous range of ow, found once per row, so the inner loop only steps
     // two indices and carries no bounds checks.
-    let rows = p.n * p.od * p.oh;
-    let begin = chunk * p.chunk;
-    let end = min(begin + p.chunk, rows);
+    let span = chunk_rows(chunk);
+    let begin = span.x;
+    let end = span.y;
     let cq = p.cpad / 4u;
     let co4 = p.co16 * 4u;
     // ow range with 0 <= ow*sw + kw - pw < iw (the same for every row).

@@ -30,18 +30,13 @@ fn tex_pos(n: u32, q: u32, d: u32, h: u32, w: u32) -> vec3<u32> {
 fn conv_fast_pack_folded_tex(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = lin(gid, nwg);
     if (i >= p.total) { return; }
-    let dst_len = p.od * p.oh * p.ow;
-    let n = i / dst_len;
-    let s = i % dst_len;
+    let s = i % (p.od * p.oh * p.ow);
+    let n = i / (p.od * p.oh * p.ow);
     let w = s % p.ow;
     let h = (s / p.ow) % p.oh;
     let d = s / (p.ow * p.oh);
-    let w0 = i32(w * p.sw) - i32(p.pw);
-    let h0 = i32(h * p.sh) - i32(p.ph);
     for (var q = 0u; q < p.cpad / 4u; q++) {
-        let c = 4u * q;
-        let v = vec4<f32>(folded_at(n, c, d, h0, w0), folded_at(n, c + 1u, d, h0, w0),
-                          folded_at(n, c + 2u, d, h0, w0), folded_at(n, c + 3u, d, h0, w0));
+        let v = folded_quad(n, q, d, i32(h * p.sh) - i32(p.ph), i32(w * p.sw) - i32(p.pw));
         textureStore(tdst, tex_pos(n, q, d, h, w), v);
     }
 }
@@ -221,12 +216,13 @@ fn conv_fast_backward_weight_tex(ids: LaneIds) {
     let live = pair < taps * cq;
     let tap = min(pair / cq, taps - 1u);
     let q = pair % cq;
-    let kw = tap % p.kw;
-    let kh = (tap / p.kw) % p.kh;
-    let kd = tap / (p.kw * p.kh);
-    let rows = p.n * p.od * p.oh;
-    let begin = chunk * p.chunk;
-    let end = min(begin + p.chunk, rows);
+    let k = tap_axes(tap);
+    let kd = k.x;
+    let kh = k.y;
+    let kw = k.z;
+    let span = chunk_rows(chunk);
+    let begin = span.x;
+    let end = span.y;
     let dq = p.co16 * 4u;   // dy texels per voxel
     var acc: Acc16;
     for (var row = begin; row < end; row++) {
