@@ -227,7 +227,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
     if let Some(f) = &a.filter {
         all.retain(|c| c.op.contains(f.as_str()) || c.shape.contains(f.as_str()));
     }
-    let mut m = Machine { adapter: gpu.info.name.clone(), cpu: bench::cpu_model(), ceiling: bench::fma_ceiling(&gpu, clock, 5)? };
+    let m = Machine { adapter: gpu.info.name.clone(), cpu: bench::cpu_model(), ceiling: bench::fma_ceiling(&gpu, clock, 5)? };
     if !a.json {
         let how = if clock == Clock::Gpu { "GPU timestamps" } else { "wall time" };
         println!("adapter: {} ({how}; median of {} samples)", m.adapter, a.repeat);
@@ -281,9 +281,9 @@ pub fn run(a: BenchArgs) -> Result<()> {
             }
         }
     }
-    // The ceiling again at the end: the machine's load may have changed over the run.
+    // The ceiling again at the end, reported beside the first (which the rows are divided
+    // by): how much the machine's speed moved over the run.
     let after = bench::fma_ceiling(&gpu, clock, 5)?;
-    m.ceiling = m.ceiling.max(after);
     if a.json {
         let out = serde_json::json!({
             "adapter": m.adapter, "cpu": m.cpu,
