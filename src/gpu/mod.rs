@@ -1,6 +1,7 @@
 //! The GPU runtime: device, tensors, the pipeline cache and the one dispatch path every op
 //! uses. Ops record into a caller's [`wgpu::ComputePass`] so a whole step shares one submit.
 
+mod calibration;
 mod context;
 mod kernel;
 mod pool;

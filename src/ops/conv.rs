@@ -17,7 +17,7 @@ const SHADER: Shader = Shader { name: "conv", source: include_str!("../../shader
 /// tests and `rendernet bench` can compare them on the same call.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum ConvKernel {
-    /// Choose by shape.
+    /// The tiled kernels, textures or buffers by the device's calibration.
     #[default]
     Auto,
     /// The reference kernels: one invocation per output value.

@@ -99,6 +99,11 @@ struct Folded {
 }
 
 impl Folded {
+    /// `g` with nothing folded.
+    fn none(g: Geometry) -> Folded {
+        Folded { g, fh: 1, fw: 1 }
+    }
+
     /// Taps per folded channel group.
     fn fold(&self) -> usize {
         self.fh * self.fw
@@ -163,9 +168,9 @@ fn volume(s: [usize; 3]) -> usize {
     s.iter().product()
 }
 
-/// Where the forward kernels read their packed operands (see the two halves of
-/// `shaders/conv_fast.wgsl`): storage buffers, or textures shared across lanes by subgroup
-/// shuffles (far cheaper loads on lavapipe; needs subgroups of 8).
+/// Where the tiled kernels read their packed operands: storage buffers
+/// (`shaders/conv_fast.wgsl`), or textures shared across lanes by subgroup shuffles
+/// (`shaders/conv_tex.wgsl`; far cheaper loads on lavapipe, needs subgroups of 8).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Operands {
     /// Channels-last storage buffers, one register tile per invocation.
@@ -175,59 +180,23 @@ pub(crate) enum Operands {
 }
 
 /// The operands `ConvKernel::Auto` uses on `gpu`: buffers without subgroups of 8; otherwise
-/// `RENDERNET_CONV_OPERANDS` (`buffers` or `textures`) if set, else whichever ran a small conv
-/// (16->16 3^3 on 16^3) faster in a calibration that is cached per adapter, driver and CPU in
-/// `$XDG_CACHE_HOME/rendernet/calibration.txt` (`~/.cache/...`), because which one wins
-/// depends on the driver and the CPU lavapipe runs on (texture fetches vs per-lane buffer
-/// loads). Decided once per device.
+/// `RENDERNET_CONV_OPERANDS` (`buffers` or `textures`) if set, else textures if they ran a
+/// small conv faster and identically (see `measure`), measured once per machine and cached
+/// (`Gpu::calibrated_choice`): which family wins depends on the driver and on the CPU
+/// lavapipe runs on (texture fetches against per-lane buffer loads).
 pub(crate) fn calibrated(gpu: &Gpu) -> Operands {
     let textures = *gpu.conv_textures.get_or_init(|| {
         if !gpu.has_subgroups_of_8() {
             return false;
         }
         match std::env::var("RENDERNET_CONV_OPERANDS").as_deref() {
-            Ok("buffers") => return false,
-            Ok("textures") => return true,
-            _ => {}
+            Ok("buffers") => false,
+            Ok("textures") => true,
+            // A failed measurement keeps the buffers, which work everywhere.
+            _ => gpu.calibrated_choice("conv-textures-v1", || measure(gpu).unwrap_or(false)),
         }
-        let key = format!(
-            "conv-operands-v1 {} | {} | {} | {}",
-            gpu.info.name,
-            gpu.info.driver,
-            gpu.info.driver_info,
-            crate::bench::cpu_model().unwrap_or_default()
-        )
-        .replace(['\n', '='], " ");
-        let path = cache_file();
-        let cached = path.as_ref().and_then(|p| std::fs::read_to_string(p).ok()).and_then(|text| {
-            text.lines().find_map(|l| l.split_once('=').filter(|(k, _)| *k == key).map(|(_, v)| v == "textures"))
-        });
-        if let Some(t) = cached {
-            return t;
-        }
-        // A failed measurement keeps the buffers, which work everywhere.
-        let t = measure(gpu).unwrap_or(false);
-        if let Some(p) = path {
-            let old = std::fs::read_to_string(&p).unwrap_or_default();
-            let mut lines: Vec<&str> = old.lines().filter(|l| !l.starts_with(&format!("{key}="))).collect();
-            let new = format!("{key}={}", if t { "textures" } else { "buffers" });
-            lines.push(&new);
-            // Best effort, written atomically: a cache that cannot be written costs a re-measure.
-            let tmp = p.with_extension("tmp");
-            if p.parent().is_some_and(|d| std::fs::create_dir_all(d).is_ok()) && std::fs::write(&tmp, lines.join("\n") + "\n").is_ok() {
-                let _ = std::fs::rename(&tmp, &p);
-            }
-        }
-        t
     });
     if textures { Operands::Textures } else { Operands::Buffers }
-}
-
-fn cache_file() -> Option<std::path::PathBuf> {
-    let base = std::env::var_os("XDG_CACHE_HOME")
-        .map(std::path::PathBuf::from)
-        .or_else(|| std::env::var_os("HOME").map(|h| std::path::PathBuf::from(h).join(".cache")))?;
-    Some(base.join("rendernet").join("calibration.txt"))
 }
 
 /// Whether the texture kernels ran the calibration conv faster than the buffer kernels (best
@@ -270,18 +239,12 @@ impl Packed {
     }
 }
 
-/// An rgba32f texture the kernels write as storage and then read, or `None` when `size`
-/// exceeds the device's texture limits (the caller falls back to buffers).
-fn texture(gpu: &Gpu, size: [usize; 3], dim: wgpu::TextureDimension) -> Option<(wgpu::TextureView, wgpu::TextureViewDimension)> {
-    let (limit, view) = match dim {
-        wgpu::TextureDimension::D3 => (gpu.limits.max_texture_dimension_3d, wgpu::TextureViewDimension::D3),
-        _ => (gpu.limits.max_texture_dimension_2d, wgpu::TextureViewDimension::D2),
-    };
-    if size.iter().any(|&v| v == 0 || v > limit as usize) {
-        return None;
-    }
+/// An rgba32f texture the kernels write as storage and then read (sizes already checked
+/// against the device's limits by `x_texture_fits` / `w_texture_fits`).
+fn texture(gpu: &Gpu, size: [usize; 3], dim: wgpu::TextureDimension) -> (wgpu::TextureView, wgpu::TextureViewDimension) {
+    let view = if dim == wgpu::TextureDimension::D3 { wgpu::TextureViewDimension::D3 } else { wgpu::TextureViewDimension::D2 };
     let tex = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("conv_fast packed"),
+        label: Some("conv_tex packed"),
         size: wgpu::Extent3d { width: size[0] as u32, height: size[1] as u32, depth_or_array_layers: size[2] as u32 },
         mip_level_count: 1,
         sample_count: 1,
@@ -290,27 +253,37 @@ fn texture(gpu: &Gpu, size: [usize; 3], dim: wgpu::TextureDimension) -> Option<(
         usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
         view_formats: &[],
     });
-    Some((tex.create_view(&Default::default()), view))
+    (tex.create_view(&Default::default()), view)
 }
 
-/// Whether `ops` can be honoured for a conv whose dispatch geometry is `g` with `cpad`
-/// packed input channels: textures need subgroups of 8 and must fit the texture limits.
+/// Whether `ops` asks for textures and the device can run the texture kernels.
+fn textures_wanted(gpu: &Gpu, ops: Operands) -> bool {
+    ops == Operands::Textures && gpu.has_subgroups_of_8()
+}
+
+/// Whether `n` items of `cpad` packed channels over `input` fit one 3D texture (`pack_x`).
+fn x_texture_fits(gpu: &Gpu, n: usize, cpad: usize, [id, ih, iw]: [usize; 3]) -> bool {
+    iw.max(ih).max(n * cpad / 4 * id) <= gpu.limits.max_texture_dimension_3d as usize
+}
+
+/// Whether the packed weights of dispatch geometry `g` fit one 2D texture (`pack_w`).
+fn w_texture_fits(gpu: &Gpu, g: &Geometry, cpad: usize) -> bool {
+    (g.co.div_ceil(16) * 16).max(volume(g.kernel) * cpad / 4) <= gpu.limits.max_texture_dimension_2d as usize
+}
+
+/// Whether a forward-style conv of dispatch geometry `g` (`cpad` packed input channels) runs
+/// on textures for `ops`.
 fn textures_fit(gpu: &Gpu, ops: Operands, g: &Geometry, cpad: usize) -> bool {
-    let l = &gpu.limits;
-    let [id, ih, iw] = g.input;
-    ops == Operands::Textures
-        && gpu.has_subgroups_of_8()
-        && iw.max(ih).max(g.n * cpad / 4 * id) <= l.max_texture_dimension_3d as usize
-        && (g.co.div_ceil(16) * 16).max(volume(g.kernel) * cpad / 4) <= l.max_texture_dimension_2d as usize
+    textures_wanted(gpu, ops) && x_texture_fits(gpu, g.n, cpad, g.input) && w_texture_fits(gpu, g, cpad)
 }
 
-/// `x` packed as the texture kernels read it (see `conv_fast_pack_input_tex`), or as a buffer.
+/// `x` packed as the texture kernels read it (see `conv_fast_pack_folded_tex`), or as a buffer.
 fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded, x: &Tensor, cpad: usize, tex: bool) -> Result<Packed> {
     if !tex {
         return Ok(Packed::Buffer(pack_folded(gpu, pass, g, f, x, cpad)?));
     }
     let [id, ih, iw] = f.g.input;
-    let (view, dim) = texture(gpu, [iw, ih, g.n * cpad / 4 * id], wgpu::TextureDimension::D3).expect("checked by textures_fit");
+    let (view, dim) = texture(gpu, [iw, ih, g.n * cpad / 4 * id], wgpu::TextureDimension::D3);
     // Without a fold the folded packing's parameters make it the plain packing.
     let p = folded_params(g, f, cpad);
     let args = [Arg::R(x), Arg::StorageTexture(&view, dim)];
@@ -325,7 +298,7 @@ fn pack_w(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: &Tensor, te
     }
     let width = p.co16 as usize * 16;
     let height = (p.kd * p.kh * p.kw) as usize * p.cpad as usize / 4;
-    let (view, dim) = texture(gpu, [width, height, 1], wgpu::TextureDimension::D2).expect("checked by textures_fit");
+    let (view, dim) = texture(gpu, [width, height, 1], wgpu::TextureDimension::D2);
     dispatch(gpu, pass, "conv_fast_pack_weights_tex", p, &[Arg::R(w), Arg::StorageTexture(&view, dim)], width * height)?;
     Ok(Packed::Texture(view, dim))
 }
@@ -412,7 +385,7 @@ pub(crate) fn backward_input(
     // The dispatch geometry's input is dy; its kernel at most the whole kernel.
     let whole = Geometry { ci: g.co, co: g.ci, input: g.output, output: g.input, stride: [1; 3], pad: [0; 3], ..*g };
     let tex = textures_fit(gpu, ops, &whole, cpad);
-    let unfolded = Folded { g: whole, fh: 1, fw: 1 };
+    let unfolded = Folded::none(whole);
     let dyp = pack_x(gpu, pass, &whole, &unfolded, dy, cpad, tex)?;
     let [_, fh, fw] = g.input;
     let [sd, sh, sw] = g.stride;
@@ -471,8 +444,9 @@ fn backward_weight_tex(
     copad: usize,
 ) -> Result<()> {
     let xp = pack_x(gpu, pass, g, f, x, cpad, true)?;
+    // dy is packed as the texture kernels pack an input: dy's channels over the output extent.
     let dy_geom = Geometry { ci: g.co, input: g.output, ..*g };
-    let dyp = pack_x(gpu, pass, &dy_geom, &Folded { g: dy_geom, fh: 1, fw: 1 }, dy, copad, true)?;
+    let dyp = pack_x(gpu, pass, &dy_geom, &Folded::none(dy_geom), dy, copad, true)?;
     let g = &f.g;
     let taps = volume(g.kernel);
     let groups = (taps * cpad / 4).div_ceil(8) * (copad / 16);
@@ -504,9 +478,8 @@ pub(crate) fn backward_weight(
     let f = fold(g, 4);
     let cpad = f.g.ci.div_ceil(4) * 4;
     let copad = g.co.div_ceil(16) * 16;
-    // dy is read as the texture kernels' input: a geometry with dy's channels and extent.
-    let dy_geom = Geometry { ci: g.co, input: g.output, ..f.g };
-    if textures_fit(gpu, ops, &f.g, cpad) && textures_fit(gpu, ops, &dy_geom, copad) {
+    // Two activation textures (x folded, dy) and no weight texture.
+    if textures_wanted(gpu, ops) && x_texture_fits(gpu, g.n, cpad, f.g.input) && x_texture_fits(gpu, g.n, copad, g.output) {
         return backward_weight_tex(gpu, pass, g, &f, x, dy, dw, cpad, copad);
     }
     let f = fold(g, 8);
