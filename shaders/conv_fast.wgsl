@@ -307,6 +307,16 @@ fn chunk_rows(chunk: u32) -> vec2<u32> {
     return vec2<u32>(begin, min(begin + p.chunk, p.n * p.od * p.oh));
 }
 
+// Output row `row` = (n, od, oh) and the input depth and row that tap `k` = (kd, kh, kw)
+// reads from it (possibly off the grid).
+struct RowAt { n: u32, od: u32, oh: u32, zd: i32, zh: i32 }
+
+fn row_at(row: u32, k: vec3<u32>) -> RowAt {
+    let oh = row % p.oh;
+    let od = (row / p.oh) % p.od;
+    return RowAt(row / (p.oh * p.od), od, oh, i32(od * p.sd + k.x) - i32(p.pd), i32(oh * p.sh + k.y) - i32(p.ph));
+}
+
 // ---- backward weight: partial sums over a chunk of output positions -------------------------
 // One invocation per (chunk, tap, group of 8 input channels, group of 16 output channels):
 // dw[co, ci, tap] += dy[n, co, o] * x[n, ci, o*stride - pad + tap] over its positions, written
@@ -328,15 +338,11 @@ fn conv_fast_backward_weight(@builtin(global_invocation_id) gid: vec3<u32>, @bui
     let tap = r % taps;
     let chunk = r / taps;
     let k = tap_axes(tap);
-    let kd = k.x;
-    let kh = k.y;
     let kw = k.z;
     // Chunks are runs of output rows (n, od, oh); within a row the taps that land inside the
     // input are a contiguous range of ow, found once per row, so the inner loop only steps
     // two indices and carries no bounds checks.
     let span = chunk_rows(chunk);
-    let begin = span.x;
-    let end = span.y;
     let cq = p.cpad / 4u;
     let co4 = p.co16 * 4u;
     // ow range with 0 <= ow*sw + kw - pw < iw (the same for every row).
@@ -354,12 +360,11 @@ fn conv_fast_backward_weight(@builtin(global_invocation_id) gid: vec3<u32>, @bui
     var e50 = vec4<f32>(0.0); var e51 = vec4<f32>(0.0); var e52 = vec4<f32>(0.0); var e53 = vec4<f32>(0.0);
     var e60 = vec4<f32>(0.0); var e61 = vec4<f32>(0.0); var e62 = vec4<f32>(0.0); var e63 = vec4<f32>(0.0);
     var e70 = vec4<f32>(0.0); var e71 = vec4<f32>(0.0); var e72 = vec4<f32>(0.0); var e73 = vec4<f32>(0.0);
-    for (var row = begin; row < end; row++) {
-        let oh = row % p.oh;
-        let od = (row / p.oh) % p.od;
-        let n = row / (p.oh * p.od);
-        let zd = i32(od * p.sd + kd) - i32(p.pd);
-        let zh = i32(oh * p.sh + kh) - i32(p.ph);
+    for (var row = span.x; row < span.y; row++) {
+        let at = row_at(row, k);
+        let n = at.n;
+        let zd = at.zd;
+        let zh = at.zh;
         if (zd < 0 || zd >= i32(p.id) || zh < 0 || zh >= i32(p.ih) || ow_lo >= ow_hi) { continue; }
         let zw = ow_lo * p.sw + kw - p.pw;
         var xi = (((n * p.id + u32(zd)) * p.ih + u32(zh)) * p.iw + zw) * cq + 2u * g8;

@@ -217,21 +217,17 @@ fn conv_fast_backward_weight_tex(ids: LaneIds) {
     let tap = min(pair / cq, taps - 1u);
     let q = pair % cq;
     let k = tap_axes(tap);
-    let kd = k.x;
-    let kh = k.y;
     let kw = k.z;
     let span = chunk_rows(chunk);
-    let begin = span.x;
-    let end = span.y;
     let dq = p.co16 * 4u;   // dy texels per voxel
     var acc: Acc16;
-    for (var row = begin; row < end; row++) {
-        let oh = row % p.oh;
-        let od = (row / p.oh) % p.od;
-        let n = row / (p.oh * p.od);
-        let zd = i32(od * p.sd + kd) - i32(p.pd);
-        let zh = i32(oh * p.sh + kh) - i32(p.ph);
-        let dz = i32((n * dq + cg * 4u) * p.od + od);
+    for (var row = span.x; row < span.y; row++) {
+        let at = row_at(row, k);
+        let n = at.n;
+        let oh = at.oh;
+        let zd = at.zd;
+        let zh = at.zh;
+        let dz = i32((n * dq + cg * 4u) * p.od + at.od);
         for (var ow0 = 0u; ow0 < p.ow; ow0 += 8u) {
             // Lane l fetches the 16 dy values at ow0 + l (zero past the row's end).
             let mine = ow0 + lane;
