@@ -460,3 +460,39 @@ fn bad_shapes_are_errors() {
     expect_err("transposed w", run(&|p| t.forward(gpu(), p, &tx, &tw_bad, None, &zeros(&[2, 5, 8, 10]))), "conv_transpose");
     assert!(t.output_shape(&[2, 4, 4, 5], tw.shape()).is_err());
 }
+
+/// `Init::XavierUpsample` makes a 4x4 stride-2 transposed conv start as nearest upsampling
+/// followed by a 3x3 conv: a constant input then gives a constant output away from the
+/// border (every output phase sums the same weights), i.e. no checkerboard. Plain Xavier
+/// weights do not (checked too, so the assertion can fail).
+#[test]
+fn upsample_init_gives_no_checkerboard() {
+    use rendernet::graph::Init;
+    let (ci, co, h, w) = (3, 2, 6, 7);
+    let (oh, ow) = (2 * h, 2 * w);
+    let g = Geom {
+        n: 1,
+        ci,
+        co,
+        input: [1, h, w],
+        output: [1, oh, ow],
+        kernel: [1, 4, 4],
+        stride: [1, 2, 2],
+        before: [0, rc::same_pads(oh, 4, 2).1, rc::same_pads(ow, 4, 2).1],
+    };
+    let x = vec![1.0; ci * h * w];
+    // Largest spread of one channel's interior values (rows and columns 2.. from each edge).
+    let spread = |init: Init| {
+        let wt: Vec<f64> = init.values(&[ci, co, 4, 4], 5, 9).into_iter().map(f64::from).collect();
+        let y = rc::conv_transpose(&g, &x, &wt, None);
+        (0..co)
+            .map(|c| {
+                let v: Vec<f64> = (2..oh - 2).flat_map(|r| (2..ow - 2).map(move |q| (r, q))).map(|(r, q)| y[(c * oh + r) * ow + q]).collect();
+                v.iter().cloned().fold(f64::MIN, f64::max) - v.iter().cloned().fold(f64::MAX, f64::min)
+            })
+            .fold(0.0, f64::max)
+    };
+    // f32 weights summed in f64: the interior is equal to ~1e-6.
+    assert!(spread(Init::XavierUpsample) < 1e-5, "phases differ: {}", spread(Init::XavierUpsample));
+    assert!(spread(Init::Xavier) > 1e-2, "plain Xavier unexpectedly flat: {}", spread(Init::Xavier));
+}

@@ -4,7 +4,7 @@ use super::truth::{SceneArgs, load};
 use clap::Args;
 use rendernet::nn::render::{Renderer, TINY_PHONG_WEIGHTS};
 use rendernet::nn::rendernet::Preset;
-use rendernet::ops::loss::psnr_from_mse;
+use rendernet::metrics::Scores;
 use rendernet::reference::{self, Image, Options, Shader};
 use rendernet::{Error, Gpu, Result};
 use std::path::PathBuf;
@@ -25,7 +25,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 128)]
     size: usize,
     /// Also render the reference renderer's image, write it beside the network's, and print
-    /// the PSNR between them.
+    /// full-frame PSNR, object PSNR, SSIM and mask IoU, each beside an all-black image's.
     #[arg(long)]
     compare: bool,
     /// Where to write the PNG.
@@ -51,8 +51,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if a.compare {
         let opts = Options { supersample: 2, ..Options::default() };
         let truth = reference::Renderer::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, a.size as u32)?;
-        let mse = img.data.iter().zip(&truth.data).map(|(x, y)| ((x - y) as f64).powi(2)).sum::<f64>() / img.data.len() as f64;
-        println!("PSNR against the reference renderer: {:.2} dB", psnr_from_mse(mse as f32, 1.0));
+        println!("against the reference renderer: {}", compare_line(&Scores::of(&img, &truth), &Scores::black_floor(&truth)));
         save_pair(&img, &truth, &a.out)?;
     } else {
         img.save_png(&a.out)?;
@@ -75,4 +74,12 @@ fn save_pair(net: &Image, truth: &Image, path: &std::path::Path) -> Result<()> {
     image::imageops::replace(&mut strip, &net.to_rgb8(), 0, 0);
     image::imageops::replace(&mut strip, &truth.to_rgb8(), s as i64, 0);
     strip.save(path).map_err(|e| Error::Invalid(format!("{}: {e}", path.display())))
+}
+
+/// The four scores, each beside the all-black image's (which full-frame PSNR flatters most).
+fn compare_line(s: &Scores, black: &Scores) -> String {
+    format!(
+        "full-frame PSNR {:.2} dB (all-black {:.2}), object PSNR {:.2} dB (all-black {:.2}), SSIM {:.3} (all-black {:.3}), mask IoU {:.3} (all-black {:.3})",
+        s.psnr, black.psnr, s.object_psnr, black.object_psnr, s.ssim, black.ssim, s.iou, black.iou
+    )
 }

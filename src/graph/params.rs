@@ -22,6 +22,12 @@ pub enum Init {
     He,
     /// Every element this value (biases 0.001 and PReLU slopes 0 in the original code).
     Constant(f32),
+    /// For a stride-2 4x4 transposed conv `[I, O, 4, 4]`: a Xavier 3x3 kernel convolved with
+    /// a 2x2 box. Such a layer starts out as nearest-neighbour upsampling followed by that
+    /// 3x3 conv, so its four output phases sum the same weights and a flat input gives a flat
+    /// output: no checkerboard at initialisation (Odena et al. 2016, "Deconvolution and
+    /// checkerboard artifacts"). Other shapes fall back to [`Init::Xavier`].
+    XavierUpsample,
 }
 
 impl Init {
@@ -33,7 +39,10 @@ impl Init {
         let fan_in = shape.get(1).copied().unwrap_or(1) * receptive;
         let limit = match self {
             Init::Constant(c) => return vec![*c; n],
-            Init::Xavier => (6.0 / (fan_in + fan_out) as f64).sqrt(),
+            Init::XavierUpsample if shape.len() == 4 && shape[2..] == [4, 4] => {
+                return upsample_kernels(shape[0], shape[1], seed, salt);
+            }
+            Init::Xavier | Init::XavierUpsample => (6.0 / (fan_in + fan_out) as f64).sqrt(),
             Init::He => (6.0 / fan_in as f64).sqrt(),
         };
         let mut state = seed ^ salt.wrapping_mul(0xD1B54A32D192ED03);
@@ -48,6 +57,27 @@ impl Init {
             })
             .collect()
     }
+}
+
+/// `[ci, co, 4, 4]` kernels, each a Xavier 3x3 kernel convolved with a 2x2 box (see
+/// [`Init::XavierUpsample`]).
+fn upsample_kernels(ci: usize, co: usize, seed: u64, salt: u64) -> Vec<f32> {
+    let k = Init::Xavier.values(&[ci, co, 3, 3], seed, salt);
+    let mut w = vec![0.0; ci * co * 16];
+    for (pair, k) in k.chunks(9).enumerate() {
+        for y in 0..4usize {
+            for x in 0..4usize {
+                let mut v = 0.0;
+                for ky in y.saturating_sub(1)..=y.min(2) {
+                    for kx in x.saturating_sub(1)..=x.min(2) {
+                        v += k[ky * 3 + kx];
+                    }
+                }
+                w[pair * 16 + y * 4 + x] = v;
+            }
+        }
+    }
+    w
 }
 
 /// A named f32 tensor read from or written to a file.

@@ -132,7 +132,7 @@ impl Builder<'_> {
 
     fn up(&mut self, name: &str, x: Value, cout: usize) -> Result<Value> {
         let cin = self.g.info(x).shape[1];
-        let w = self.param(&format!("{name}.weight"), &[cin, cout, 4, 4], Init::Xavier)?;
+        let w = self.param(&format!("{name}.weight"), &[cin, cout, 4, 4], Init::XavierUpsample)?;
         let b = self.param(&format!("{name}.bias"), &[cout], Init::Constant(0.001))?;
         let t = ConvTranspose::conv2d([4, 4], [2, 2], Padding::Same);
         self.g.apply(name, Op::ConvTranspose(t), &[x, w, b])
@@ -163,7 +163,7 @@ impl RenderNet {
     /// Builds the network for batch `n` on a camera-grid window of `cam_hw` = `[H, W]`
     /// (the full `[cam, cam]` to render, smaller windows for patch training; depth is always
     /// whole). With `with_loss`, adds target inputs and the training loss: for Phong,
-    /// MSE(image) + MSE(normal map) + BCE(mask); for an image head, BCE (greyscale).
+    /// MSE(image) + MSE(normal map) + MSE(albedo map) + BCE(mask); for an image head, BCE (greyscale).
     pub fn build(p: &Preset, head: Head, n: usize, cam_hw: [usize; 2], with_loss: bool) -> Result<RenderNet> {
         if cam_hw.iter().any(|&s| s % 4 != 0 || s == 0) {
             return Err(Error::Invalid(format!("camera window {cam_hw:?}: sides must be positive multiples of 4")));
@@ -218,14 +218,17 @@ impl RenderNet {
                 Ok(v)
             };
             loss = Some(match (head, maps) {
-                (Head::Phong(_), Some([normal, _, mask])) => {
+                (Head::Phong(_), Some([normal, albedo, mask])) => {
                     let ti = t(&mut g, "phong", 3)?;
                     let tn = t(&mut g, "normal", 3)?;
+                    let ta = t(&mut g, "albedo", 1)?;
                     let tm = t(&mut g, "mask", 1)?;
                     let li = g.apply("loss.phong", Op::Loss(Loss::Mse), &[image, ti])?;
                     let ln = g.apply("loss.normal", Op::Loss(Loss::Mse), &[normal, tn])?;
+                    let la = g.apply("loss.albedo", Op::Loss(Loss::Mse), &[albedo, ta])?;
                     let lm = g.apply("loss.mask", Op::Loss(Loss::Bce), &[mask, tm])?;
                     let l = g.apply("loss.sum1", Op::Add, &[li, ln])?;
+                    let l = g.apply("loss.sum2", Op::Add, &[l, la])?;
                     g.apply("loss", Op::Add, &[l, lm])?
                 }
                 _ => {

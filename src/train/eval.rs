@@ -1,30 +1,66 @@
-//! Held-out evaluation: mean PSNR with a 95% interval, and per-shape PSNR.
+//! Held-out evaluation: full-frame PSNR, object PSNR, SSIM and mask IoU ([`crate::metrics`]),
+//! each a mean with a 95% interval beside what an all-black image scores, and per-shape PSNR.
 
 use super::batch::Batch;
 use crate::data::{Dataset, Split};
 use crate::error::Result;
 use crate::graph::Executor;
 use crate::gpu::Gpu;
+use crate::metrics::Scores;
 use crate::nn::rendernet::{Head, Preset, RenderNet};
-use crate::ops::loss::psnr_from_mse;
+use crate::reference::Image;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-/// PSNR statistics over a split.
-#[derive(Clone, Debug)]
-pub struct EvalReport {
-    /// Mean PSNR (dB) over samples.
+/// A score's mean over samples and the half width of its 95% interval.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Interval {
+    /// Mean over samples.
     pub mean: f32,
     /// Half width of the 95% interval of the mean (1.96 standard errors).
     pub ci95: f32,
+}
+
+impl Interval {
+    /// Mean and 95% half width of `xs` (sample standard deviation; 0 for one sample).
+    pub fn of(xs: &[f64]) -> Self {
+        let n = xs.len().max(1) as f64;
+        let mean = xs.iter().sum::<f64>() / n;
+        let var = xs.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n.max(2.0) - 1.0);
+        Interval { mean: mean as f32, ci95: (1.96 * (var / n).sqrt()) as f32 }
+    }
+}
+
+/// Scores over a split. Full-frame PSNR keeps its original fields (`mean`, `ci95`, `black`,
+/// `per_shape`), which the training loop and older readers use.
+#[derive(Clone, Debug)]
+pub struct EvalReport {
+    /// Mean full-frame PSNR (dB) over samples.
+    pub mean: f32,
+    /// Half width of the 95% interval of `mean` (1.96 standard errors).
+    pub ci95: f32,
     /// Samples evaluated.
     pub count: usize,
-    /// Mean PSNR per shape id.
+    /// Mean full-frame PSNR per shape id.
     pub per_shape: BTreeMap<u32, f32>,
-    /// Mean PSNR an all-black image would score on the same samples: with small objects on
-    /// a black background PSNR is dominated by the background, so this is the floor to
-    /// compare against.
+    /// Mean full-frame PSNR an all-black image would score on the same samples: with small
+    /// objects on a black background PSNR is dominated by the background, so this is the
+    /// floor to compare against.
     pub black: f32,
+    /// PSNR inside the object box ([`crate::metrics::object_psnr`]).
+    pub object_psnr: Interval,
+    /// SSIM over the object box ([`crate::metrics::ssim`]).
+    pub ssim: Interval,
+    /// IoU of the foreground masks ([`crate::metrics::mask_iou`]).
+    pub iou: Interval,
+    /// Mean object PSNR of an all-black image (its box is the truth's).
+    pub black_object_psnr: f32,
+    /// Mean SSIM of an all-black image.
+    pub black_ssim: f32,
+    /// Mean IoU of an all-black image: 0 unless some truth has no foreground.
+    pub black_iou: f32,
+    /// Mean object PSNR per shape id.
+    pub per_shape_object_psnr: BTreeMap<u32, f32>,
 }
 
 /// Renders up to `limit` held-out samples (0 = all) with the weights at `weights` and
@@ -41,9 +77,10 @@ pub fn evaluate(gpu: &Gpu, p: &Preset, head: Head, weights: &Path, ds: &Dataset,
         Head::Phong(_) => "phong",
         Head::Image(_) => "image",
     };
-    let mut psnrs = Vec::with_capacity(n);
-    let mut black = 0.0f32;
-    let mut shapes: BTreeMap<u32, Vec<f32>> = BTreeMap::new();
+    // The image side (twice the camera grid's for the tiny preset), from the network itself.
+    let side = net.graph.info(net.image).shape[3];
+    let (mut net_scores, mut black_scores) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    let mut shapes: BTreeMap<u32, Vec<Scores>> = BTreeMap::new();
     // Spread the evaluated samples over the split so every shape is represented.
     for k in 0..n {
         let i = k * test.len() / n;
@@ -58,22 +95,29 @@ pub fn evaluate(gpu: &Gpu, p: &Preset, head: Head, weights: &Path, ds: &Dataset,
         ex.forward(gpu)?;
         let y = ex.read(gpu, net.image)?;
         let t = &b.targets[0].1;
-        // Both sides clamped to [0, 1], as images are stored.
-        let mse = y.iter().zip(t).map(|(a, b)| (a.clamp(0.0, 1.0) - b) as f64).map(|d| d * d).sum::<f64>() / t.len() as f64;
-        let db = psnr_from_mse(mse as f32, 1.0).min(99.0);
-        psnrs.push(db);
-        let mse0 = t.iter().map(|&b| (b as f64) * (b as f64)).sum::<f64>() / t.len() as f64;
-        black += psnr_from_mse(mse0 as f32, 1.0).min(99.0);
-        shapes.entry(s.shape_id).or_default().push(db);
+        // Both sides clamped to [0, 1], as images are stored (the metrics clamp too).
+        let image = |data: Vec<f32>| Image { channels: t.len() / (side * side), size: side, data };
+        let truth = image(t.clone());
+        let scores = Scores::of(&image(y.iter().map(|v| v.clamp(0.0, 1.0)).collect()), &truth);
+        net_scores.push(scores);
+        black_scores.push(Scores::black_floor(&truth));
+        shapes.entry(s.shape_id).or_default().push(scores);
     }
-    let count = psnrs.len().max(1);
-    let mean = psnrs.iter().sum::<f32>() / count as f32;
-    let var = psnrs.iter().map(|x| (x - mean) * (x - mean)).sum::<f32>() / (count.max(2) - 1) as f32;
+    let stat = |v: &[Scores], f: fn(&Scores) -> f64| Interval::of(&v.iter().map(f).collect::<Vec<_>>());
+    let psnr = stat(&net_scores, |s| s.psnr);
+    let per_shape = |f: fn(&Scores) -> f64| shapes.iter().map(|(k, v)| (*k, stat(v, f).mean)).collect();
     Ok(EvalReport {
-        mean,
-        ci95: 1.96 * (var / count as f32).sqrt(),
-        count: psnrs.len(),
-        black: black / count as f32,
-        per_shape: shapes.into_iter().map(|(k, v)| (k, v.iter().sum::<f32>() / v.len() as f32)).collect(),
+        mean: psnr.mean,
+        ci95: psnr.ci95,
+        count: net_scores.len(),
+        per_shape: per_shape(|s| s.psnr),
+        black: stat(&black_scores, |s| s.psnr).mean,
+        object_psnr: stat(&net_scores, |s| s.object_psnr),
+        ssim: stat(&net_scores, |s| s.ssim),
+        iou: stat(&net_scores, |s| s.iou),
+        black_object_psnr: stat(&black_scores, |s| s.object_psnr).mean,
+        black_ssim: stat(&black_scores, |s| s.ssim).mean,
+        black_iou: stat(&black_scores, |s| s.iou).mean,
+        per_shape_object_psnr: per_shape(|s| s.object_psnr),
     })
 }

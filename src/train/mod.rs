@@ -138,9 +138,10 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
         let mut b = Batch::default();
         for _ in 0..cfg.batch {
             let i = (rng_next(&mut rng) % train.len() as u64) as usize;
-            let h0 = (rng_next(&mut rng) % (p.cam - w + 1) as u64) as usize;
-            let w0 = (rng_next(&mut rng) % (p.cam - w + 1) as u64) as usize;
-            b.push(p, &train.get(i)?, [h0, w0, w, w], &names)?;
+            let sample = train.get(i)?;
+            let r = [rng_next(&mut rng), rng_next(&mut rng), rng_next(&mut rng)];
+            let (h0, w0) = batch::window_origin(p, &sample, w, r);
+            b.push(p, &sample, [h0, w0, w, w], &names)?;
         }
         feed(gpu, &cur, &b)?;
         let lr = exponential_decay(cfg.lr, cfg.decay, cfg.decay_steps, step, false);
