@@ -3,17 +3,34 @@
 //!
 //! `cargo run --example contact_sheet -- [MESH] [OUT.png]`
 
+use clap::Parser;
 use rendernet::Gpu;
-use rendernet::reference::{Light, Renderer, Shader, View};
+use rendernet::reference::{Light, Renderer, Shader, View, png_path_problem, write_png};
 use rendernet::voxel::{self, Mesh, VoxelizeOptions, shapes};
+use std::path::PathBuf;
+use std::process::ExitCode;
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let mut args = std::env::args().skip(1);
-    let grid = match args.next() {
-        Some(path) => voxel::voxelize(&Mesh::load(&path)?, &VoxelizeOptions::smooth(64))?,
+/// Renders a mesh (voxelised at 64^3) with every reference shader into one PNG row.
+#[derive(Parser)]
+struct Args {
+    /// Mesh (.obj, .off or .ply); default: a procedural chair.
+    mesh: Option<PathBuf>,
+    /// Where to write the PNG.
+    #[arg(default_value = "contact-sheet.png", value_parser = png_out)]
+    out: PathBuf,
+}
+
+/// Rejects a non-PNG output name at parse time, before any rendering.
+fn png_out(s: &str) -> Result<PathBuf, String> {
+    let p = PathBuf::from(s);
+    png_path_problem(&p).map_or(Ok(p), Err)
+}
+
+fn run(a: Args) -> Result<(), Box<dyn std::error::Error>> {
+    let grid = match &a.mesh {
+        Some(path) => voxel::voxelize(&Mesh::load(path)?, &VoxelizeOptions::smooth(64))?,
         None => shapes::chair(0).to_grid(64)?,
     };
-    let out = args.next().unwrap_or_else(|| "contact-sheet.png".into());
     let gpu = Gpu::new()?;
     let renderer = Renderer::new(&gpu);
     let s = 128u32;
@@ -22,8 +39,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let img = renderer.render(&gpu, &grid, &View::default(), &Light::default(), shader, s)?;
         image::imageops::replace(&mut sheet, &img.to_rgb8(), (i as u32 * s) as i64, 0);
     }
-    sheet.save(&out)?;
+    write_png(&image::DynamicImage::ImageRgb8(sheet), &a.out)?;
     let names: Vec<&str> = Shader::ALL.iter().map(|s| s.name()).collect();
-    println!("wrote {out}: {}", names.join(", "));
+    println!("wrote {}: {}", a.out.display(), names.join(", "));
     Ok(())
+}
+
+fn main() -> ExitCode {
+    // Errors print with Display (a sentence), not Debug, and exit non-zero.
+    match run(Args::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }

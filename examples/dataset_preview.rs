@@ -3,26 +3,48 @@
 //!
 //! `cargo run --example dataset_preview -- DIR [train|test] [SAMPLES] [OUT.png]`
 
+use clap::{Parser, ValueEnum};
 use rendernet::data::{Dataset, Split};
+use rendernet::reference::{png_path_problem, write_png};
+use std::path::PathBuf;
+use std::process::ExitCode;
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let dir = args
-        .first()
-        .ok_or("usage: dataset_preview DIR [train|test] [SAMPLES] [OUT.png]")?;
-    let split = if args.get(1).map(String::as_str) == Some("test") {
-        Split::Test
-    } else {
-        Split::Train
-    };
-    let n: usize = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(8);
-    let out = args
-        .get(3)
-        .cloned()
-        .unwrap_or_else(|| "dataset-preview.png".into());
-    let ds = Dataset::open(dir)?;
-    let view = ds.split(split);
-    let n = n.min(view.len());
+/// Which split to preview.
+#[derive(Clone, Copy, ValueEnum)]
+enum Which {
+    Train,
+    Test,
+}
+
+/// Tiles a dataset's first samples into one PNG: a row per sample, a column per image.
+#[derive(Parser)]
+struct Args {
+    /// Dataset directory (from `rendernet dataset`).
+    dir: PathBuf,
+    /// Split to show.
+    #[arg(value_enum, default_value = "train")]
+    split: Which,
+    /// Samples (rows) to show, at most the split's size.
+    #[arg(default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..))]
+    samples: u32,
+    /// Where to write the PNG.
+    #[arg(default_value = "dataset-preview.png", value_parser = png_out)]
+    out: PathBuf,
+}
+
+/// Rejects a non-PNG output name at parse time, before any rendering.
+fn png_out(s: &str) -> Result<PathBuf, String> {
+    let p = PathBuf::from(s);
+    png_path_problem(&p).map_or(Ok(p), Err)
+}
+
+fn run(a: Args) -> Result<(), Box<dyn std::error::Error>> {
+    let ds = Dataset::open(&a.dir)?;
+    let view = ds.split(match a.split {
+        Which::Train => Split::Train,
+        Which::Test => Split::Test,
+    });
+    let n = (a.samples as usize).min(view.len());
     let s = ds.manifest.image as u32;
     let mut sheet = None;
     for i in 0..n {
@@ -30,22 +52,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let cols = sample.images.len() as u32;
         let sheet = sheet.get_or_insert_with(|| image::RgbImage::new(s * cols, s * n as u32));
         for (c, img) in sample.images.values().enumerate() {
-            image::imageops::replace(
-                sheet,
-                &img.to_rgb8(),
-                (c as u32 * s) as i64,
-                (i as u32 * s) as i64,
-            );
+            image::imageops::replace(sheet, &img.to_rgb8(), (c as u32 * s) as i64, (i as u32 * s) as i64);
         }
         println!(
             "{i}: shape {} view {:?} light az {:.0} el {:.0}",
             sample.shape_id, sample.view, sample.light.azimuth, sample.light.elevation
         );
     }
-    sheet.ok_or("no samples")?.save(&out)?;
-    println!(
-        "wrote {out} (columns: {:?})",
-        view.get(0)?.images.keys().collect::<Vec<_>>()
-    );
+    let sheet = sheet.ok_or(format!("{}: the split has no samples", a.dir.display()))?;
+    write_png(&image::DynamicImage::ImageRgb8(sheet), &a.out)?;
+    println!("wrote {} (columns: {:?})", a.out.display(), view.get(0)?.images.keys().collect::<Vec<_>>());
     Ok(())
+}
+
+fn main() -> ExitCode {
+    // Errors print with Display (a sentence), not Debug, and exit non-zero.
+    match run(Args::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }

@@ -3,25 +3,53 @@
 //! `cargo run --example render -- [GRID.binvox|.safetensors] [OUT.png]`
 //! (default: a procedural chair, `render-example.png`).
 
+use clap::Parser;
+use rendernet::Gpu;
 use rendernet::nn::render::{Renderer, TINY_PHONG_WEIGHTS};
 use rendernet::nn::rendernet::Preset;
-use rendernet::reference::{Light, View};
-use rendernet::voxel::{Binvox, shapes, safetensors_io};
-use rendernet::Gpu;
+use rendernet::reference::{Light, View, png_path_problem};
+use rendernet::voxel::{Binvox, safetensors_io, shapes};
+use std::path::PathBuf;
+use std::process::ExitCode;
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let mut args = std::env::args().skip(1);
-    let grid = match args.next() {
-        Some(p) if p.ends_with(".binvox") => Binvox::read(&p)?.grid,
-        Some(p) => safetensors_io::read(&p)?,
+/// Renders a voxel grid with the embedded RenderNet weights to a 128-pixel PNG.
+#[derive(Parser)]
+struct Args {
+    /// Voxel grid (.binvox or .safetensors); default: a procedural chair.
+    grid: Option<PathBuf>,
+    /// Where to write the PNG.
+    #[arg(default_value = "render-example.png", value_parser = png_out)]
+    out: PathBuf,
+}
+
+/// Rejects a non-PNG output name at parse time, before any rendering.
+fn png_out(s: &str) -> Result<PathBuf, String> {
+    let p = PathBuf::from(s);
+    png_path_problem(&p).map_or(Ok(p), Err)
+}
+
+fn run(a: Args) -> Result<(), Box<dyn std::error::Error>> {
+    let grid = match &a.grid {
+        Some(p) if p.extension().is_some_and(|e| e == "binvox") => Binvox::read(p)?.grid,
+        Some(p) => safetensors_io::read(p)?,
         None => shapes::chair(42).to_grid(64)?,
     };
-    let out = args.next().unwrap_or_else(|| "render-example.png".into());
     let gpu = Gpu::new()?;
     let mut net = Renderer::new(&gpu, Preset::tiny(), TINY_PHONG_WEIGHTS, "embedded", 128)?;
     let view = View { azimuth: 45.0, elevation: 75.0, radius: 3.6 };
     let image = net.render(&gpu, &grid, &view, &Light::default())?;
-    image.save_png(&out)?;
-    println!("wrote {out}");
+    image.save_png(&a.out)?;
+    println!("wrote {}", a.out.display());
     Ok(())
+}
+
+fn main() -> ExitCode {
+    // Errors print with Display (a sentence), not Debug, and exit non-zero.
+    match run(Args::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }

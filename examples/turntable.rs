@@ -2,29 +2,56 @@
 //!
 //! `cargo run --example turntable -- [FRAMES] [OUT.png]` (default 8 frames of a chair).
 
+use clap::Parser;
+use rendernet::Gpu;
 use rendernet::nn::render::{Renderer, TINY_PHONG_WEIGHTS};
 use rendernet::nn::rendernet::Preset;
-use rendernet::reference::{Light, View};
+use rendernet::reference::{Light, View, png_path_problem, write_png};
 use rendernet::voxel::shapes;
-use rendernet::Gpu;
+use std::path::PathBuf;
+use std::process::ExitCode;
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let mut args = std::env::args().skip(1);
-    let frames: usize = args.next().map(|s| s.parse()).transpose()?.unwrap_or(8).max(1);
-    let out = args.next().unwrap_or_else(|| "turntable.png".into());
+/// Renders a procedural chair from evenly spaced azimuths into one 128-pixel-high PNG strip.
+#[derive(Parser)]
+struct Args {
+    /// Number of frames (azimuths), at least 1.
+    #[arg(default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=360))]
+    frames: u32,
+    /// Where to write the PNG.
+    #[arg(default_value = "turntable.png", value_parser = png_out)]
+    out: PathBuf,
+}
+
+/// Rejects a non-PNG output name at parse time, before any rendering.
+fn png_out(s: &str) -> Result<PathBuf, String> {
+    let p = PathBuf::from(s);
+    png_path_problem(&p).map_or(Ok(p), Err)
+}
+
+fn run(a: Args) -> Result<(), Box<dyn std::error::Error>> {
     let gpu = Gpu::new()?;
     let grid = shapes::chair(7).to_grid(64)?;
     let mut net = Renderer::new(&gpu, Preset::tiny(), TINY_PHONG_WEIGHTS, "embedded", 128)?;
-    let s = 128u32;
-    let mut strip = image::RgbImage::new(s * frames as u32, s);
+    let (s, frames) = (128u32, a.frames);
+    let mut strip = image::RgbImage::new(s * frames, s);
     for f in 0..frames {
         let view = View { azimuth: 360.0 * f as f64 / frames as f64, elevation: 70.0, radius: 3.5 };
         let img = net.render(&gpu, &grid, &view, &Light::default())?;
-        let rgb = img.to_rgb8();
-        image::imageops::replace(&mut strip, &rgb, (f as u32 * s) as i64, 0);
+        image::imageops::replace(&mut strip, &img.to_rgb8(), (f * s) as i64, 0);
         println!("frame {}/{frames}", f + 1);
     }
-    strip.save(&out)?;
-    println!("wrote {out}");
+    write_png(&image::DynamicImage::ImageRgb8(strip), &a.out)?;
+    println!("wrote {}", a.out.display());
     Ok(())
+}
+
+fn main() -> ExitCode {
+    // Errors print with Display (a sentence), not Debug, and exit non-zero.
+    match run(Args::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }

@@ -6,8 +6,9 @@ use std::fmt;
 /// Errors from the GPU runtime and the ops.
 #[derive(Debug)]
 pub enum Error {
-    /// No adapter matched; `tried` says which backends / names were asked for.
-    NoAdapter { tried: String, found: Vec<String> },
+    /// No adapter matched; `tried` says which backends / names were asked for, `found` the
+    /// adapters present that the name filter rejected, `advice` what to do in this case.
+    NoAdapter { tried: String, found: Vec<String>, advice: String },
     /// The adapter exists but refused to give us a device.
     Device(String),
     /// A tensor or op argument has the wrong shape.
@@ -28,19 +29,14 @@ pub type Result<T> = std::result::Result<T, Error>;
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Error::NoAdapter { tried, found } => {
+            Error::NoAdapter { tried, found, advice } => {
                 write!(f, "no GPU adapter found (asked for {tried}")?;
                 if found.is_empty() {
-                    write!(f, "; none exists on this machine")?;
+                    write!(f, "; those backends have none on this machine")?;
                 } else {
                     write!(f, "; present but not matching: {}", found.join(", "))?;
                 }
-                write!(
-                    f,
-                    "). On Debian/Ubuntu without a GPU install the CPU Vulkan driver: \
-                     `apt-get install -y mesa-vulkan-drivers`, then retry (optionally with \
-                     WGPU_BACKEND=vulkan WGPU_ADAPTER_NAME=llvmpipe)"
-                )
+                write!(f, "). {advice}")
             }
             Error::Device(m) => write!(f, "could not open the GPU device: {m}"),
             Error::Shape { op, msg } => write!(f, "{op}: {msg}"),

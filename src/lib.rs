@@ -14,6 +14,7 @@ pub mod data;
 pub mod error;
 pub mod gpu;
 pub mod graph;
+pub mod invert;
 pub mod metrics;
 pub mod nn;
 pub mod ops;

@@ -34,6 +34,14 @@ enum Cmd {
     Train(cli::train::TrainArgs),
     /// Mean held-out PSNR (95% interval) and per-shape PSNR of trained weights.
     Eval(cli::eval::EvalArgs),
+    /// Recover the camera pose and the light from one image of a known shape, by gradient
+    /// descent through the frozen network (coarse silhouette search, then Adam on the best
+    /// starts). Without --image, the target is rendered from the scene flags and the errors
+    /// of the recovered pose and light are reported.
+    Invert(cli::invert::InvertArgs),
+    /// Invert held-out samples of a Phong dataset (shape known) and report camera and light
+    /// direction errors in degrees (median, share within 5 and 10 degrees) and time per image.
+    EvalInvert(cli::invert::EvalInvertArgs),
     /// Time the conv, transposed-conv and projection kernels (reference and tiled) on shapes
     /// from the RenderNet presets: median ms and GFLOP/s per pass, GPU timestamps when the
     /// adapter has them.
@@ -61,6 +69,8 @@ fn main() -> ExitCode {
         Cmd::Render(a) => cli::render::run(a),
         Cmd::Eval(a) => cli::eval::run(a),
         Cmd::Bench(a) => cli::bench::run(a),
+        Cmd::Invert(a) => cli::invert::run(a),
+        Cmd::EvalInvert(a) => cli::invert::run_eval(a),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

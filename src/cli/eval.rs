@@ -13,7 +13,8 @@ use std::path::PathBuf;
 /// Evaluate weights on a dataset's held-out split.
 #[derive(Args)]
 pub struct EvalArgs {
-    /// Weights (safetensors, as written by `train` or shipped in weights/).
+    /// Weights (safetensors, as written by `train` or shipped in weights/; a training
+    /// checkpoint works too, its Adam state ignored).
     #[arg(long)]
     weights: PathBuf,
     /// Dataset directory.

@@ -4,6 +4,8 @@ pub mod bench;
 pub mod dataset;
 pub mod eval;
 pub mod info;
+pub mod invert;
+pub mod output;
 pub mod render;
 pub mod train;
 pub mod truth;

@@ -15,20 +15,22 @@ use std::time::Instant;
 pub struct RenderArgs {
     #[command(flatten)]
     scene: SceneArgs,
-    /// Weights (safetensors from `rendernet train`); default: the embedded tiny Phong weights.
+    /// Weights: a safetensors file from `rendernet train` (<out>.weights.safetensors, or the
+    /// checkpoint <out> itself, whose Adam state is ignored); default: the embedded tiny
+    /// Phong weights.
     #[arg(long)]
     weights: Option<PathBuf>,
     /// Network size the weights belong to.
     #[arg(long, default_value = "tiny")]
     preset: String,
     /// Image side in pixels (a multiple of 8 for the tiny preset).
-    #[arg(long, default_value_t = 128)]
+    #[arg(long, default_value_t = 128, allow_negative_numbers = true)]
     size: usize,
     /// Also render the reference renderer's image, write it beside the network's, and print
     /// full-frame PSNR, object PSNR, SSIM and mask IoU, each beside an all-black image's.
     #[arg(long)]
     compare: bool,
-    /// Where to write the PNG.
+    /// Where to write the PNG (a .png name; written atomically).
     #[arg(long, default_value = "render.png")]
     out: PathBuf,
 }
@@ -36,6 +38,8 @@ pub struct RenderArgs {
 /// Loads the grid and weights, renders, writes the PNG and reports timings.
 pub fn run(a: RenderArgs) -> Result<()> {
     let t0 = Instant::now();
+    a.scene.validate(a.size)?;
+    super::output::check_png_out(&a.out)?;
     let (grid, what) = load(&a.scene)?;
     let gpu = Gpu::new()?;
     let preset = Preset::by_name(&a.preset)?;
@@ -69,11 +73,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
 
 /// The network's image and the reference's, side by side in one PNG.
 fn save_pair(net: &Image, truth: &Image, path: &std::path::Path) -> Result<()> {
-    let s = net.size as u32;
-    let mut strip = image::RgbImage::new(2 * s, s);
-    image::imageops::replace(&mut strip, &net.to_rgb8(), 0, 0);
-    image::imageops::replace(&mut strip, &truth.to_rgb8(), s as i64, 0);
-    strip.save(path).map_err(|e| Error::Invalid(format!("{}: {e}", path.display())))
+    reference::write_png(&image::DynamicImage::ImageRgb8(Image::side_by_side(&[net, truth])?), path)
 }
 
 /// The four scores, each beside the all-black image's (which full-frame PSNR flatters most).

@@ -4,7 +4,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rendernet::nn::rendernet::Preset;
 use rendernet::train::{Progress, TrainConfig, train};
-use rendernet::{Gpu, Result};
+use rendernet::{Error, Gpu, Result};
 use std::path::PathBuf;
 
 /// Train RenderNet on a dataset from `rendernet dataset`.
@@ -19,8 +19,12 @@ pub struct TrainArgs {
     data: PathBuf,
     /// Checkpoint to write (atomically). Next to it: <out>.weights.safetensors (parameters
     /// only, for `render` and `eval`) and <out>.curve.png (log loss in red, PSNR in blue).
+    /// An existing <out> is only replaced with --resume or --force.
     #[arg(long)]
     out: PathBuf,
+    /// Overwrite an existing --out checkpoint (and the files beside it) with a fresh run.
+    #[arg(long)]
+    force: bool,
     /// Optimizer steps in all; crops grow from 1/8 to 1/2 of the grid over three equal phases.
     #[arg(long, default_value_t = 6000)]
     steps: u64,
@@ -56,6 +60,15 @@ pub struct TrainArgs {
 
 /// Runs training, drawing a progress bar with loss and images/s.
 pub fn run(a: TrainArgs) -> Result<()> {
+    // A fresh run over an existing checkpoint would replace hours of training at its first
+    // evaluation; --resume continues it (same file or not), --force says the loss is meant.
+    if a.resume.is_none() && !a.force && a.out.exists() {
+        return Err(Error::Invalid(format!(
+            "--out {}: the file exists (a checkpoint of an earlier run?); pass --resume {0} to continue it, \
+             or --force to overwrite it with a fresh run",
+            a.out.display()
+        )));
+    }
     let cfg = TrainConfig {
         preset: Preset::by_name(&a.preset)?,
         data: a.data,

@@ -1,42 +1,63 @@
 //! `rendernet truth`: one ground-truth image from the reference renderer.
 
 use clap::Args;
+use rendernet::reference::camera::{self, RADIUS_AT_SCALE_ONE};
 use rendernet::reference::{Light, Options, Renderer, Shader, View};
 use rendernet::voxel::{self, Binvox, Family, Mesh, VoxelGrid, VoxelizeOptions};
 use rendernet::{Error, Gpu, Result};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// What to render and from where: shared by `truth` and `render`.
+/// What to render and from where: shared by `truth` and `render`, and validated by
+/// [`SceneArgs::validate`] before either loads anything.
+// Numeric flags take hyphen values so `--radius -1` and `--azimuth -inf` reach the range
+// checks (clap would otherwise read them as unknown flags).
 #[derive(Args, Debug)]
 pub struct SceneArgs {
     /// Voxel grid (.binvox, .safetensors, MagicaVoxel .vox) or mesh (.obj, .off, .ply, voxelised at --resolution).
     #[arg(long, value_name = "PATH", conflicts_with = "shape")]
     voxels: Option<PathBuf>,
     /// Grid side used to voxelise a mesh or a procedural --shape.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, allow_negative_numbers = true)]
     resolution: usize,
     /// Procedural shape family instead of a file: chair, table, sofa or primitive.
     #[arg(long, value_parser = parse_family)]
     shape: Option<Family>,
     /// Seed of the procedural shape.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     seed: u64,
-    /// Camera azimuth in degrees about the up axis (0 looks at the object's front).
-    #[arg(long, default_value_t = View::default().azimuth, allow_negative_numbers = true)]
+    /// Camera azimuth in degrees about the up axis (0 looks at the object's front); any finite value.
+    #[arg(long, default_value_t = View::default().azimuth, allow_hyphen_values = true)]
     azimuth: f64,
-    /// Camera elevation: polar angle in degrees, 90 horizontal, smaller looks down (10..170).
-    #[arg(long, default_value_t = View::default().elevation)]
+    /// Camera elevation: polar angle in degrees, 0..=180: 90 horizontal, smaller looks down
+    /// (training used 10..170).
+    #[arg(long, default_value_t = View::default().elevation, allow_hyphen_values = true)]
     elevation: f64,
-    /// Camera radius (3..6.3); the image is 2 * radius / 3.3 object units wide.
-    #[arg(long, default_value_t = View::default().radius)]
+    /// Camera radius; the image is 2 * radius / 3.3 object units wide (training used 3..6.3).
+    /// Accepted: 0.05 up to 3.3 * size / 16, where the object still spans 8 pixels.
+    #[arg(long, default_value_t = View::default().radius, allow_hyphen_values = true)]
     radius: f64,
-    /// Light azimuth in degrees relative to the camera (positive = from the right).
-    #[arg(long, default_value_t = Light::default().azimuth, allow_negative_numbers = true)]
+    /// Light azimuth in degrees relative to the camera (positive = from the right); any finite value.
+    #[arg(long, default_value_t = Light::default().azimuth, allow_hyphen_values = true)]
     light_azimuth: f64,
-    /// Light elevation (polar) in degrees relative to the camera (90 = level, smaller = above).
-    #[arg(long, default_value_t = Light::default().elevation)]
+    /// Light elevation (polar) in degrees relative to the camera, 0..=180 (90 = level, smaller = above).
+    #[arg(long, default_value_t = Light::default().elevation, allow_hyphen_values = true)]
     light_elevation: f64,
+}
+
+/// Closest camera the flags accept. The frame is then 2 * 0.05 / 3.3 = 0.03 object units
+/// wide, two voxels of the default 64^3 grid: any closer only magnifies the inside of one
+/// voxel into a flat field (and, far closer, the network's pose scale overflows f32).
+pub const MIN_RADIUS: f64 = 0.05;
+
+/// Fewest pixels the object's unit box must span. The box spans `size * 3.3 / (2 * radius)`
+/// pixels; below 8 the reference image is an unrecognisable dot and RenderNet's a grey smudge
+/// (at --size 128: radius 20 still shows the bunny at 10 px, radius 40 a 5 px blob).
+const MIN_OBJECT_PX: f64 = 8.0;
+
+/// Farthest camera the flags accept for `size`-pixel images (see [`MIN_OBJECT_PX`]).
+pub fn max_radius(size: usize) -> f64 {
+    RADIUS_AT_SCALE_ONE * size as f64 / (2.0 * MIN_OBJECT_PX)
 }
 
 impl SceneArgs {
@@ -48,6 +69,32 @@ impl SceneArgs {
     /// The light the flags name (material constants: the reference renderer's defaults).
     pub fn light(&self) -> Light {
         Light { azimuth: self.light_azimuth, elevation: self.light_elevation, ..Light::default() }
+    }
+
+    /// Checks the camera and light flags for `size`-pixel images, naming the flag and its
+    /// range: the same checks as [`View::validate`], plus the radius bounds above.
+    pub fn validate(&self, size: usize) -> Result<()> {
+        let flag = |name: &str, v: f64, check: std::result::Result<(), String>| {
+            check.map_err(|m| Error::Invalid(format!("--{name} {v}: {m}")))
+        };
+        flag("azimuth", self.azimuth, camera::check_angle(self.azimuth))?;
+        flag("elevation", self.elevation, camera::check_polar(self.elevation))?;
+        flag("light-azimuth", self.light_azimuth, camera::check_angle(self.light_azimuth))?;
+        flag("light-elevation", self.light_elevation, camera::check_polar(self.light_elevation))?;
+        let max = max_radius(size);
+        let radius_ok = camera::check_radius(self.radius).is_ok() && (MIN_RADIUS..=max).contains(&self.radius);
+        flag(
+            "radius",
+            self.radius,
+            if radius_ok {
+                Ok(())
+            } else {
+                Err(format!(
+                    "must lie in {MIN_RADIUS}..={} for --size {size} (closer shows the inside of one voxel, farther leaves the object under {MIN_OBJECT_PX} pixels)",
+                    short(max)
+                ))
+            },
+        )
     }
 
     /// One line saying what the flags render.
@@ -68,12 +115,12 @@ pub struct TruthArgs {
     #[arg(long, default_value = "phong", value_parser = parse_shader)]
     shader: Shader,
     /// Image side in pixels.
-    #[arg(long, default_value_t = 128)]
+    #[arg(long, default_value_t = 128, allow_negative_numbers = true)]
     size: u32,
     /// Sub-pixels per axis averaged into each pixel (anti-aliasing); 1 = none.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, allow_negative_numbers = true)]
     supersample: u32,
-    /// Where to write the PNG.
+    /// Where to write the PNG (a .png name; written atomically).
     #[arg(long, default_value = "truth.png")]
     out: PathBuf,
 }
@@ -142,9 +189,17 @@ fn display(p: &Path) -> String {
     p.display().to_string()
 }
 
+/// `x` with at most two decimals and no trailing zeros (26.4, not 26.400000000000002).
+fn short(x: f64) -> String {
+    let s = format!("{x:.2}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
 /// Loads, renders, writes the PNG, and reports what was rendered and how long it took.
 pub fn run(a: TruthArgs) -> Result<()> {
     let t0 = Instant::now();
+    a.scene.validate(a.size as usize)?;
+    super::output::check_png_out(&a.out)?;
     let (grid, what) = load(&a.scene)?;
     let gpu = Gpu::new()?;
     let (view, light) = (a.scene.view(), a.scene.light());

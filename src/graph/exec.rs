@@ -112,6 +112,15 @@ impl Executor {
         self.grad_wanted[v.0] = true;
     }
 
+    /// Stops computing parameter gradients (inverse rendering through a frozen network:
+    /// only the inputs marked with [`Executor::want_grad`] get one, which saves the
+    /// weight-gradient kernels). Training steps need them, so call this only for inference.
+    pub fn freeze_params(&mut self) {
+        for p in self.graph.params() {
+            self.grad_wanted[p.0] = false;
+        }
+    }
+
     /// Reads a value: an input, a parameter, or a node output marked with `keep`.
     pub fn read(&self, gpu: &Gpu, v: Value) -> Result<Vec<f32>> {
         let name = &self.graph.info(v).name;

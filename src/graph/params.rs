@@ -118,21 +118,42 @@ pub fn load_safetensors(path: &Path) -> Result<(BTreeMap<String, (Vec<usize>, Ve
 }
 
 /// [`load_safetensors`] on bytes already in memory (embedded weights); `p` names them in errors.
+/// Every tensor that is not finite F32 is listed in one error.
 pub fn parse_safetensors(data: &[u8], p: &str) -> Result<(BTreeMap<String, (Vec<usize>, Vec<f32>)>, HashMap<String, String>)> {
-    let st = SafeTensors::deserialize(&data).map_err(|e| Error::Invalid(format!("{p}: not a valid safetensors file: {e}")))?;
-    let (_, meta) = SafeTensors::read_metadata(&data).map_err(|e| Error::Invalid(format!("{p}: {e}")))?;
-    let mut out = BTreeMap::new();
+    let (out, bad, meta) = decode(data, p)?;
+    if !bad.is_empty() {
+        let list: Vec<String> = bad.iter().map(|(name, why)| format!("tensor '{name}' {why}")).collect();
+        return Err(Error::Invalid(format!("{p}: {}", list.join("; "))));
+    }
+    Ok((out, meta))
+}
+
+/// Tensors decoded as f32, what is wrong with each other tensor (its dtype is not F32, or a
+/// value is not finite), and the metadata; only an unreadable file is an error, so callers
+/// can report every problem at once.
+#[allow(clippy::type_complexity)]
+fn decode(data: &[u8], p: &str) -> Result<(BTreeMap<String, (Vec<usize>, Vec<f32>)>, BTreeMap<String, String>, HashMap<String, String>)> {
+    let st = SafeTensors::deserialize(data).map_err(|e| Error::Invalid(format!("{p}: not a valid safetensors file: {e}")))?;
+    let (_, meta) = SafeTensors::read_metadata(data).map_err(|e| Error::Invalid(format!("{p}: {e}")))?;
+    let (mut out, mut bad) = (BTreeMap::new(), BTreeMap::new());
     for (name, view) in st.tensors() {
         if view.dtype() != Dtype::F32 {
-            return Err(Error::Invalid(format!("{p}: tensor '{name}' is {:?}, expected F32", view.dtype())));
+            bad.insert(name, format!("is {:?}, expected F32", view.dtype()));
+            continue;
         }
         let vals: Vec<f32> = view.data().chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
         if let Some(i) = vals.iter().position(|v| !v.is_finite()) {
-            return Err(Error::Invalid(format!("{p}: tensor '{name}' holds {} at index {i}", vals[i])));
+            bad.insert(name, format!("holds {} at index {i}", vals[i]));
+            continue;
         }
         out.insert(name, (view.shape().to_vec(), vals));
     }
-    Ok((out, meta.metadata().clone().unwrap_or_default()))
+    Ok((out, bad, meta.metadata().clone().unwrap_or_default()))
+}
+
+/// Whether `name` is optimizer state in a checkpoint (see [`Executor::save_checkpoint`]).
+fn is_adam_state(name: &str) -> bool {
+    name.starts_with("adam.m.") || name.starts_with("adam.v.")
 }
 
 impl Executor {
@@ -152,35 +173,51 @@ impl Executor {
         save_safetensors(path, &self.param_tensors(gpu)?, HashMap::new())
     }
 
-    /// Loads parameters from `path`. Every parameter must be present with its shape; all
-    /// missing, unexpected and mis-shaped names are reported together.
+    /// Loads parameters from `path`: a weights file, or a checkpoint whose Adam moments are
+    /// ignored (its parameters are the same tensors the weights file beside it holds). Every
+    /// parameter must be present, F32, finite and of its shape; all missing, unexpected,
+    /// mis-shaped and mis-typed tensors are reported together.
     pub fn load_params(&mut self, gpu: &Gpu, path: &Path) -> Result<()> {
-        let (mut file, _) = load_safetensors(path)?;
-        self.take_params(gpu, path, &mut file, true)
+        let data = std::fs::read(path).map_err(|e| Error::Io { path: path.display().to_string(), source: e })?;
+        self.load_params_bytes(gpu, &data, &path.display().to_string())
     }
 
-    /// Loads parameters from safetensors bytes (e.g. weights embedded in the binary).
+    /// [`Executor::load_params`] on safetensors bytes (e.g. weights embedded in the binary).
     pub fn load_params_bytes(&mut self, gpu: &Gpu, bytes: &[u8], name: &str) -> Result<()> {
-        let (mut file, _) = parse_safetensors(bytes, name)?;
-        self.take_params(gpu, Path::new(name), &mut file, true)
+        let (mut file, mut bad, _) = decode(bytes, name)?;
+        // A checkpoint passed where weights are expected: its parameters serve as they are;
+        // the optimizer state is of no use outside training, so it is not "unexpected".
+        file.retain(|k, _| !is_adam_state(k));
+        bad.retain(|k, _| !is_adam_state(k));
+        self.take_params(gpu, Path::new(name), &mut file, &bad)
     }
 
-    fn take_params(&mut self, gpu: &Gpu, path: &Path, file: &mut BTreeMap<String, (Vec<usize>, Vec<f32>)>, exact: bool) -> Result<()> {
+    /// Feeds every parameter from `file`, which must hold exactly the parameters (a name in
+    /// `bad` is present but unusable, for the reason given), or lists every problem.
+    fn take_params(
+        &mut self,
+        gpu: &Gpu,
+        path: &Path,
+        file: &mut BTreeMap<String, (Vec<usize>, Vec<f32>)>,
+        bad: &BTreeMap<String, String>,
+    ) -> Result<()> {
         let mut problems = Vec::new();
         let mut ok = Vec::new();
         for v in self.graph().params() {
             let info = self.graph().info(v);
             match file.remove(&info.name) {
-                None => problems.push(format!("missing '{}' {:?}", info.name, info.shape)),
+                None => match bad.get(&info.name) {
+                    Some(why) => problems.push(format!("'{}' {why}", info.name)),
+                    None => problems.push(format!("missing '{}' {:?}", info.name, info.shape)),
+                },
                 Some((shape, _)) if shape != info.shape => {
                     problems.push(format!("'{}' has shape {shape:?}, the model needs {:?}", info.name, info.shape))
                 }
                 Some((_, vals)) => ok.push((v, vals)),
             }
         }
-        if exact {
-            problems.extend(file.keys().map(|k| format!("unexpected '{k}'")));
-        }
+        let is_param = |k: &str| self.graph().params().into_iter().any(|v| self.graph().info(v).name == k);
+        problems.extend(file.keys().chain(bad.keys().filter(|k| !is_param(k))).map(|k| format!("unexpected '{k}'")));
         if !problems.is_empty() {
             return Err(Error::Invalid(format!("{}: does not match the model: {}", path.display(), problems.join("; "))));
         }
@@ -223,7 +260,7 @@ impl Executor {
                 true
             }
         });
-        self.take_params(gpu, path, &mut file, true)?;
+        self.take_params(gpu, path, &mut file, &BTreeMap::new())?;
         for v in self.graph().params() {
             let info = self.graph().info(v).clone();
             let (m, s) = (moments.remove(&format!("adam.m.{}", info.name)), moments.remove(&format!("adam.v.{}", info.name)));

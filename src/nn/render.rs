@@ -40,8 +40,12 @@ impl Renderer {
     }
 
     /// Renders `grid` (any size: resampled to the preset's input) from `view` under `light`.
-    /// Returns the RGB image `[3, size, size]`, clamped to [0, 1].
+    /// Returns the RGB image `[3, size, size]`, clamped to [0, 1]; errors on a view or light
+    /// that [`View::validate`] or [`Light::validate`] rejects.
     pub fn render(&mut self, gpu: &Gpu, grid: &VoxelGrid, view: &View, light: &Light) -> Result<Image> {
+        // Checked here, not left to the pose tensor's NaN guard, which can only name 'pose'.
+        view.validate().map_err(|m| Error::Invalid(format!("render: view: {m}")))?;
+        light.validate().map_err(|m| Error::Invalid(format!("render: light: {m}")))?;
         let p = &self.preset;
         let g = if grid.dims() == [p.input; 3] {
             grid.clone()

@@ -82,17 +82,30 @@ impl View {
 
     /// Errors unless the angles are finite, elevation lies in 0..=180 and radius is positive.
     pub fn validate(&self) -> Result<(), String> {
-        if !self.azimuth.is_finite() {
-            return Err(format!("azimuth {} is not finite", self.azimuth));
-        }
-        if !(0.0..=180.0).contains(&self.elevation) {
-            return Err(format!("elevation {} is outside 0..=180 degrees", self.elevation));
-        }
-        if !(self.radius.is_finite() && self.radius > 0.0) {
-            return Err(format!("radius {} must be positive and finite", self.radius));
-        }
-        Ok(())
+        let field = |name: &str, v: f64, check: Result<(), String>| check.map_err(|m| format!("{name} {v}: {m}"));
+        field("azimuth", self.azimuth, check_angle(self.azimuth))?;
+        field("elevation", self.elevation, check_polar(self.elevation))?;
+        field("radius", self.radius, check_radius(self.radius))
     }
+}
+
+// One check per kind of value, shared by `View::validate` and the CLI's camera and light
+// flags, so a bad value gets the same range whichever way it comes in. Each says what the
+// value must be; the caller prefixes its own name for it (a field, a flag).
+
+/// An azimuth: any finite number of degrees.
+pub fn check_angle(deg: f64) -> Result<(), String> {
+    if deg.is_finite() { Ok(()) } else { Err("must be a finite number of degrees".into()) }
+}
+
+/// A polar angle (camera or light elevation): degrees in 0..=180.
+pub fn check_polar(deg: f64) -> Result<(), String> {
+    if (0.0..=180.0).contains(&deg) { Ok(()) } else { Err("must lie in 0..=180 (degrees)".into()) }
+}
+
+/// A camera radius: positive and finite.
+pub fn check_radius(r: f64) -> Result<(), String> {
+    if r.is_finite() && r > 0.0 { Ok(()) } else { Err("must be positive and finite".into()) }
 }
 
 /// A directional light and the Phong material constants.

@@ -18,7 +18,7 @@ pub mod camera;
 mod image;
 
 pub use camera::{Light, View};
-pub use image::Image;
+pub use image::{Image, png_path_problem, write_png};
 
 use crate::error::{Error, Result};
 use crate::gpu::{self, Arg, Gpu, Tensor};

@@ -1,0 +1,214 @@
+//! `rendernet invert`: recover camera pose and light from one image of a known voxel grid,
+//! by gradient descent through the frozen network (library: `rendernet::invert`).
+
+use super::truth::{SceneArgs, load};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use rendernet::data::Dataset;
+use rendernet::invert::{self, InvertOptions, Inverter, angle_between, light_direction, view_direction};
+use rendernet::nn::rendernet::Head;
+use rendernet::train::head_for;
+use rendernet::train::eval::Interval;
+use rendernet::nn::render::TINY_PHONG_WEIGHTS;
+use rendernet::nn::rendernet::Preset;
+use rendernet::reference::{self, Image, Light, Options, Shader};
+use rendernet::{Error, Gpu, Result};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Flags of `rendernet invert`.
+#[derive(Args, Debug)]
+pub struct InvertArgs {
+    /// The image to explain (square RGB, the network's image size: 128 px for tiny). Without
+    /// it, the reference renderer draws the target from the scene flags (--azimuth, ...,
+    /// --light-elevation), and the errors of the recovered pose and light are printed.
+    #[arg(long)]
+    image: Option<PathBuf>,
+    /// The shape (--voxels or --shape; default the bunny) and, without --image, the true view
+    /// and light.
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Weights of a Phong RenderNet; default: the embedded tiny Phong weights.
+    #[arg(long)]
+    weights: Option<PathBuf>,
+    /// Network size the weights belong to.
+    #[arg(long, default_value = "tiny")]
+    preset: String,
+    /// Azimuth starts of the coarse silhouette search (evenly spaced over 360 degrees).
+    #[arg(long, default_value_t = InvertOptions::default().azimuths)]
+    azimuths: usize,
+    /// Elevation starts of the coarse search (evenly spaced inside 0..180).
+    #[arg(long, default_value_t = InvertOptions::default().elevations)]
+    elevations: usize,
+    /// Best starts refined by gradient descent.
+    #[arg(long, default_value_t = InvertOptions::default().keep)]
+    starts: usize,
+    /// Gradient steps of the refinement.
+    #[arg(long, default_value_t = InvertOptions::default().steps)]
+    steps: usize,
+    /// PNG with the input beside the network's render at the recovered pose and light.
+    #[arg(long, default_value = "invert.png")]
+    out: PathBuf,
+    /// Print JSON (pose, light, MSE, errors when known, loss curve, seconds) instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Loads the shape and the image (or renders it), inverts, reports.
+pub fn run(a: InvertArgs) -> Result<()> {
+    let t0 = Instant::now();
+    super::output::check_png_out(&a.out)?;
+    let preset = Preset::by_name(&a.preset)?;
+    if a.image.is_none() {
+        // The scene flags then describe the true view and light, rendered as the target.
+        a.scene.validate(preset.image_for(preset.cam))?;
+    }
+    let (grid, what) = load(&a.scene)?;
+    let gpu = Gpu::new()?;
+    let (bytes, name) = weights(&a.weights)?;
+    let inv = Inverter::new(preset, &bytes, &name, Light::default());
+    let (target, truth) = match &a.image {
+        Some(p) => (Image::load_rgb(p)?, None),
+        None => {
+            let (view, light) = (a.scene.view(), a.scene.light());
+            let opts = Options { supersample: 2, ..Options::default() };
+            let img = reference::Renderer::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, inv.size() as u32)?;
+            (img, Some((view, light)))
+        }
+    };
+    let o = InvertOptions { azimuths: a.azimuths, elevations: a.elevations, keep: a.starts, steps: a.steps, ..Default::default() };
+    let bar = ProgressBar::new(o.steps as u64);
+    bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} refinement steps [{elapsed_precise}] {msg}").expect("static template"));
+    let t1 = Instant::now();
+    let est = inv.invert(&gpu, &grid, &target, &o, |step, mse| {
+        bar.set_position(step as u64);
+        bar.set_message(format!("best MSE {mse:.5}"));
+    })?;
+    bar.finish_and_clear();
+    let secs = t1.elapsed().as_secs_f64();
+    reference::write_png(&image::DynamicImage::ImageRgb8(Image::side_by_side(&[&target, &est.image])?), &a.out)?;
+    let errors = truth.map(|(v, l)| {
+        (angle_between(view_direction(&v), view_direction(&est.view)), angle_between(light_direction(&l), light_direction(&est.light)), est.view.radius / v.radius)
+    });
+    let psnr = -10.0 * est.mse.max(1e-10).log10();
+    if a.json {
+        let mut j = serde_json::json!({
+            "shape": what,
+            "azimuth": est.view.azimuth, "elevation": est.view.elevation, "radius": est.view.radius,
+            "light_azimuth": est.light.azimuth, "light_elevation": est.light.elevation,
+            "mse": est.mse, "psnr": psnr, "curve": est.curve, "seconds": secs, "out": a.out.display().to_string(),
+        });
+        if let Some((pe, le, rr)) = errors {
+            j["pose_error_degrees"] = pe.into();
+            j["light_error_degrees"] = le.into();
+            j["radius_ratio"] = rr.into();
+        }
+        println!("{}", serde_json::to_string_pretty(&j).map_err(|e| Error::Invalid(e.to_string()))?);
+        return Ok(());
+    }
+    println!("inverted {what}");
+    println!(
+        "recovered: azimuth {:.1} elevation {:.1} radius {:.2}, light azimuth {:.1} elevation {:.1}",
+        est.view.azimuth, est.view.elevation, est.view.radius, est.light.azimuth, est.light.elevation
+    );
+    println!("re-render against the input: MSE {:.5} (PSNR {psnr:.2} dB)", est.mse);
+    if let Some((pe, le, rr)) = errors {
+        println!("errors against the true scene: camera direction {pe:.1} deg, light direction {le:.1} deg, radius x{rr:.3}");
+    }
+    println!("wrote {} (input | network at the recovered pose) in {:.1} s ({secs:.1} s inverting on {})", a.out.display(), t0.elapsed().as_secs_f64(), gpu.info.name);
+    Ok(())
+}
+
+/// Flags of `rendernet eval-invert`.
+#[derive(Args, Debug)]
+pub struct EvalInvertArgs {
+    /// Phong dataset whose held-out samples (grid, true view and light, reference image) are
+    /// inverted; its shapes should be unseen by the weights.
+    #[arg(long)]
+    data: PathBuf,
+    /// Held-out samples to invert, spread over the split (0 = all).
+    #[arg(long, default_value_t = 10)]
+    samples: usize,
+    /// Weights of a Phong RenderNet; default: the embedded tiny Phong weights.
+    #[arg(long)]
+    weights: Option<PathBuf>,
+    /// Network size the weights belong to.
+    #[arg(long, default_value = "tiny")]
+    preset: String,
+    /// Refinement steps per sample.
+    #[arg(long, default_value_t = InvertOptions::default().steps)]
+    steps: usize,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Inverts held-out samples and summarises the errors.
+pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
+    let gpu = Gpu::new()?;
+    let ds = Dataset::open(&a.data)?;
+    let Head::Phong(ph) = head_for(&ds)? else {
+        return Err(Error::Invalid(format!("{}: inversion needs a Phong dataset", a.data.display())));
+    };
+    let light = Light { ambient: ph.ambient, kd: ph.kd, ks: ph.ks, shininess: ph.shininess, ..Light::default() };
+    let (bytes, name) = weights(&a.weights)?;
+    let inv = Inverter::new(Preset::by_name(&a.preset)?, &bytes, &name, light);
+    let o = InvertOptions { steps: a.steps, ..Default::default() };
+    let bar = ProgressBar::new(a.samples as u64);
+    bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} images [{elapsed_precise}<{eta_precise}]").expect("static template"));
+    let errs = invert::evaluate(&gpu, &inv, &ds, a.samples, &o, |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })?;
+    bar.finish_and_clear();
+    let pose: Vec<f64> = errs.iter().map(|e| e.pose_degrees).collect();
+    let light: Vec<f64> = errs.iter().map(|e| e.light_degrees).collect();
+    let radius: Vec<f64> = errs.iter().map(|e| (e.radius_ratio - 1.0).abs()).collect();
+    let within = |xs: &[f64], t: f64| xs.iter().filter(|&&x| x <= t).count() as f64 / xs.len().max(1) as f64;
+    let secs = Interval::of(&errs.iter().map(|e| e.seconds).collect::<Vec<_>>());
+    if a.json {
+        let j = serde_json::json!({
+            "samples": errs.len(),
+            "pose_error_median_degrees": median(&pose),
+            "pose_error_mean_degrees": Interval::of(&pose).mean, "pose_error_ci95_degrees": Interval::of(&pose).ci95,
+            "pose_within_5_degrees": within(&pose, 5.0), "pose_within_10_degrees": within(&pose, 10.0),
+            "light_error_median_degrees": median(&light), "light_within_10_degrees": within(&light, 10.0),
+            "radius_relative_error_median": median(&radius),
+            "seconds_per_image": secs.mean,
+            "per_sample": errs.iter().map(|e| serde_json::json!({
+                "shape": e.shape_id, "pose_degrees": e.pose_degrees, "light_degrees": e.light_degrees,
+                "radius_ratio": e.radius_ratio, "mse": e.mse, "seconds": e.seconds})).collect::<Vec<_>>(),
+        });
+        println!("{}", serde_json::to_string_pretty(&j).map_err(|e| Error::Invalid(e.to_string()))?);
+        return Ok(());
+    }
+    let iv = Interval::of(&pose);
+    println!("{} held-out images of {}, shape known, {} on {}", errs.len(), a.data.display(), name, gpu.info.name);
+    println!(
+        "camera direction error: median {:.1} deg, mean {:.1} ± {:.1} (95%), within 5 deg {:.0}%, within 10 deg {:.0}%",
+        median(&pose), iv.mean, iv.ci95, 100.0 * within(&pose, 5.0), 100.0 * within(&pose, 10.0)
+    );
+    println!("light direction error: median {:.1} deg, within 10 deg {:.0}%", median(&light), 100.0 * within(&light, 10.0));
+    println!("radius relative error: median {:.3}", median(&radius));
+    println!("{:.1} s per image (mean)", secs.mean);
+    Ok(())
+}
+
+/// Median of `xs` (NaN when empty).
+fn median(xs: &[f64]) -> f64 {
+    let mut v = xs.to_vec();
+    v.sort_by(|a, b| a.total_cmp(b));
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// The weights' bytes and a name for errors: the file, or the embedded tiny Phong weights.
+fn weights(path: &Option<PathBuf>) -> Result<(Vec<u8>, String)> {
+    match path {
+        Some(p) => Ok((std::fs::read(p).map_err(|e| Error::Io { path: p.display().to_string(), source: e })?, p.display().to_string())),
+        None => Ok((TINY_PHONG_WEIGHTS.to_vec(), "embedded tiny-phong weights".to_string())),
+    }
+}
