@@ -177,9 +177,7 @@ impl Inverter {
         if o.azimuths == 0 || o.elevations == 0 || o.keep == 0 {
             return Err(Error::Invalid("azimuth and elevation starts and kept starts must be at least 1".into()));
         }
-        let p = &self.preset;
-        let g = if grid.dims() == [p.input; 3] { grid.clone() } else { grid.resample_to(p.input).map_err(|e| Error::Invalid(e.to_string()))? };
-        let gv = camera::input_values(&g);
+        let gv = self.grid_values(grid)?;
         let hw = self.size * self.size;
         let fg: Vec<bool> = (0..hw).map(|i| (0..3).any(|c| target.data[c * hw + i] > FOREGROUND)).collect();
         let target_area = fg.iter().filter(|&&f| f).count() as f64;
@@ -215,29 +213,46 @@ impl Inverter {
         self.refine(gpu, &gv, target, &mut vars, o, &mut progress)
     }
 
+    /// The image MSE (unclamped, as the loss op computes it) of each start in `unknowns` —
+    /// `[azimuth, elevation, ln radius, light azimuth, light elevation]`, degrees — against
+    /// `target`, with its gradient with respect to those five numbers: what the refinement
+    /// descends, exposed for callers with their own optimiser (and for testing against
+    /// finite differences).
+    pub fn gradient(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, unknowns: &[[f64; 5]]) -> Result<Vec<(f64, [f64; 5])>> {
+        let gv = self.grid_values(grid)?;
+        let vars: Vec<Vars> = unknowns.iter().map(|&u| Vars(u)).collect();
+        let mut d = Descent::new(self, gpu, target, vars.len())?;
+        let (img, grads) = d.step(self, gpu, &gv, &vars)?;
+        let per = 3 * self.size * self.size;
+        Ok(img
+            .chunks(per)
+            .zip(grads)
+            .map(|(y, g)| (y.iter().zip(&target.data).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / per as f64, g))
+            .collect())
+    }
+
+    fn grid_values(&self, grid: &VoxelGrid) -> Result<Vec<f32>> {
+        let p = &self.preset;
+        let g = if grid.dims() == [p.input; 3] { grid.clone() } else { grid.resample_to(p.input).map_err(|e| Error::Invalid(e.to_string()))? };
+        Ok(camera::input_values(&g))
+    }
+
     /// Adam on every kept start at once; returns the best.
     fn refine(&self, gpu: &Gpu, gv: &[f32], target: &Image, vars: &mut [Vars], o: &InvertOptions, progress: &mut impl FnMut(usize, f64)) -> Result<Estimate> {
         let n = vars.len();
-        let (net, mut ex, extra) = self.executor(gpu, n, true)?;
-        let (tv, loss) = extra.expect("built with a loss");
-        ex.feed(gpu, tv, &target.data.repeat(n))?;
-        let light_in = net.light.expect("Phong head");
+        let mut d = Descent::new(self, gpu, target, n)?;
         let (mut m, mut v) = (vec![[0.0f64; 5]; n], vec![[0.0f64; 5]; n]);
         let (b1, b2) = (0.9f64, 0.999f64);
         let mut curve = Vec::with_capacity(o.steps);
         let mut best: Option<(f64, Vars, Vec<f32>)> = None;
+        let per = 3 * self.size * self.size;
         for step in 0..=o.steps {
-            self.feed(gpu, &net, &ex, gv, vars)?;
-            ex.backward(gpu, loss)?;
-            let img = ex.read(gpu, net.image)?;
-            let per = 3 * self.size * self.size;
-            let mses: Vec<f64> = img
-                .chunks(per)
-                .map(|y| y.iter().zip(&target.data).map(|(a, b)| ((a.clamp(0.0, 1.0) - b) as f64).powi(2)).sum::<f64>() / per as f64)
-                .collect();
-            for (k, &mse) in mses.iter().enumerate() {
+            let (img, grads) = d.step(self, gpu, gv, vars)?;
+            for (k, y) in img.chunks(per).enumerate() {
+                // Scored as the user sees it: clamped to [0, 1].
+                let mse = y.iter().zip(&target.data).map(|(a, b)| ((a.clamp(0.0, 1.0) - b) as f64).powi(2)).sum::<f64>() / per as f64;
                 if best.as_ref().is_none_or(|b| mse < b.0) {
-                    best = Some((mse, vars[k], img[k * per..(k + 1) * per].to_vec()));
+                    best = Some((mse, vars[k], y.to_vec()));
                 }
             }
             let b = best.as_ref().expect("at least one start").0;
@@ -246,13 +261,10 @@ impl Inverter {
             if step == o.steps {
                 break;
             }
-            let gp = ex.grad(gpu, net.pose)?;
-            let gl = ex.grad(gpu, light_in)?;
             // Step size decays linearly to a tenth: large moves first, then settling.
             let lr = o.lr_degrees * (1.0 - 0.9 * step as f64 / o.steps.max(1) as f64);
-            for k in 0..n {
-                let g = chain(&vars[k], &gp[k * 6..k * 6 + 6], &gl[k * 6..k * 6 + 6], &self.preset);
-                let t = (step + 1) as i32;
+            let t = (step + 1) as i32;
+            for (k, g) in grads.iter().enumerate() {
                 for j in 0..5 {
                     m[k][j] = b1 * m[k][j] + (1.0 - b1) * g[j];
                     v[k][j] = b2 * v[k][j] + (1.0 - b2) * g[j] * g[j];
@@ -272,6 +284,38 @@ impl Inverter {
             curve,
             image: Image { channels: 3, size: self.size, data: img.into_iter().map(|x| x.clamp(0.0, 1.0)).collect() },
         })
+    }
+}
+
+/// A frozen network with an MSE loss against one target, for a batch of starts.
+struct Descent {
+    net: RenderNet,
+    ex: Executor,
+    loss: Value,
+}
+
+impl Descent {
+    fn new(inv: &Inverter, gpu: &Gpu, target: &Image, n: usize) -> Result<Descent> {
+        let (net, ex, extra) = inv.executor(gpu, n, true)?;
+        let (tv, loss) = extra.expect("built with a loss");
+        ex.feed(gpu, tv, &target.data.repeat(n))?;
+        Ok(Descent { net, ex, loss })
+    }
+
+    /// Renders every start and returns the images (unclamped, batch-major) and each start's
+    /// gradient of its own MSE with respect to its unknowns.
+    fn step(&mut self, inv: &Inverter, gpu: &Gpu, gv: &[f32], vars: &[Vars]) -> Result<(Vec<f32>, Vec<[f64; 5]>)> {
+        inv.feed(gpu, &self.net, &self.ex, gv, vars)?;
+        self.ex.backward(gpu, self.loss)?;
+        let img = self.ex.read(gpu, self.net.image)?;
+        let gp = self.ex.grad(gpu, self.net.pose)?;
+        let gl = self.ex.grad(gpu, self.net.light.expect("Phong head"))?;
+        // The loss is the batch mean: each start's own MSE has n times its gradient.
+        let n = vars.len() as f64;
+        let grads = (0..vars.len())
+            .map(|k| chain(&vars[k], &gp[k * 6..k * 6 + 6], &gl[k * 6..k * 6 + 6], &inv.preset).map(|g| g * n))
+            .collect();
+        Ok((img, grads))
     }
 }
 
