@@ -8,6 +8,7 @@
 mod exec;
 mod op;
 pub mod params;
+pub mod resize_conv;
 pub mod schedule;
 
 pub use exec::{Executor, StepStats};

@@ -60,24 +60,9 @@ impl Init {
 }
 
 /// `[ci, co, 4, 4]` kernels, each a Xavier 3x3 kernel convolved with a 2x2 box (see
-/// [`Init::XavierUpsample`]).
+/// [`Init::XavierUpsample`] and [`super::resize_conv`]).
 fn upsample_kernels(ci: usize, co: usize, seed: u64, salt: u64) -> Vec<f32> {
-    let k = Init::Xavier.values(&[ci, co, 3, 3], seed, salt);
-    let mut w = vec![0.0; ci * co * 16];
-    for (pair, k) in k.chunks(9).enumerate() {
-        for y in 0..4usize {
-            for x in 0..4usize {
-                let mut v = 0.0;
-                for ky in y.saturating_sub(1)..=y.min(2) {
-                    for kx in x.saturating_sub(1)..=x.min(2) {
-                        v += k[ky * 3 + kx];
-                    }
-                }
-                w[pair * 16 + y * 4 + x] = v;
-            }
-        }
-    }
-    w
+    Init::Xavier.values(&[ci, co, 3, 3], seed, salt).chunks(9).flat_map(super::resize_conv::expand).collect()
 }
 
 /// A named f32 tensor read from or written to a file.

@@ -147,6 +147,7 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
         let lr = exponential_decay(cfg.lr, cfg.decay, cfg.decay_steps, step, false);
         let ts = std::time::Instant::now();
         cur.ex.train_step(gpu, cur.net.loss.expect("built with loss"), &Adam::new(lr))?;
+        keep_resize_convs(gpu, &cur)?;
         let loss = cur.ex.read(gpu, cur.net.loss.expect("built with loss"))?[0];
         if !loss.is_finite() {
             return Err(Error::Invalid(format!("step {step}: the loss is {loss}; stopping before the weights go bad (last checkpoint: {})", cfg.out.display())));
@@ -168,6 +169,22 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
         }
     }
     Ok(psnr)
+}
+
+/// Projects the transposed convs' weights (`up.*.weight`) back onto resize-convolutions
+/// after an optimiser step (see `graph::resize_conv`): they stay "nearest upsample + 3x3
+/// conv", which cannot grow a checkerboard, at the transposed conv's cost.
+fn keep_resize_convs(gpu: &Gpu, ph: &Phase) -> Result<()> {
+    let g = ph.ex.graph();
+    for v in g.params() {
+        let info = g.info(v);
+        if info.name.starts_with("up.") && info.name.ends_with(".weight") && info.shape[2..] == [4, 4] {
+            let mut w = ph.ex.read(gpu, v)?;
+            crate::graph::resize_conv::project(&mut w);
+            ph.ex.feed(gpu, v, &w)?;
+        }
+    }
+    Ok(())
 }
 
 fn feed(gpu: &Gpu, ph: &Phase, b: &Batch) -> Result<()> {
