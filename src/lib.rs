@@ -19,6 +19,7 @@ pub mod metrics;
 pub mod nn;
 pub mod ops;
 pub mod reference;
+pub mod stress;
 pub mod train;
 pub mod voxel;
 

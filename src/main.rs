@@ -42,6 +42,10 @@ enum Cmd {
     /// Invert held-out samples of a Phong dataset (shape known) and report camera and light
     /// direction errors in degrees (median, share within 5 and 10 degrees) and time per image.
     EvalInvert(cli::invert::EvalInvertArgs),
+    /// Sweep corrupted (voxel dropout, salt, value noise), coarse, two-object and extreme-view
+    /// versions of a scene through RenderNet and the reference renderer, each scored against
+    /// the reference image of the clean scene; tables or JSON, and a contact sheet PNG.
+    Stress(cli::stress::StressArgs),
     /// Time the conv, transposed-conv and projection kernels (reference and tiled) on shapes
     /// from the RenderNet presets: median ms and GFLOP/s per pass, GPU timestamps when the
     /// adapter has them.
@@ -70,6 +74,7 @@ fn main() -> ExitCode {
         Cmd::Eval(a) => cli::eval::run(a),
         Cmd::Bench(a) => cli::bench::run(a),
         Cmd::Invert(a) => cli::invert::run(a),
+        Cmd::Stress(a) => cli::stress::run(a),
         Cmd::EvalInvert(a) => cli::invert::run_eval(a),
     };
     match r {

@@ -322,3 +322,27 @@ fn backend_missing_from_the_build_is_not_blamed_on_mesa() {
     assert!(e.contains("no metal backend on linux") && e.contains("vulkan"), "{e}");
     assert!(!e.contains("apt-get"), "{e}");
 }
+
+/// `stress --json` runs every sweep on the default scene; the reference renderer on the
+/// clean grid reproduces its own truth exactly (99 dB), the network does not but stays well
+/// above the all-black floor, and the contact sheet has two rows per sweep.
+#[test]
+fn stress_runs_every_sweep_and_scores_against_the_clean_scene() {
+    let dir = scratch("stress");
+    let sheet = dir.join("sheet.png");
+    let out = run_ok(&["stress", "--json", "--out", sheet.to_str().unwrap()]);
+    let rows: Vec<serde_json::Value> = serde_json::from_str(&out).unwrap();
+    for sweep in ["dropout", "salt", "value-noise", "downsample", "two-objects", "view"] {
+        assert!(rows.iter().any(|r| r["sweep"] == sweep), "sweep {sweep} missing");
+    }
+    let at = |sweep: &str, method: &str, level: f64| {
+        rows.iter().find(|r| r["sweep"] == sweep && r["method"] == method && r["level"].as_f64() == Some(level)).unwrap()["object_psnr"].as_f64().unwrap()
+    };
+    assert_eq!(at("dropout", "reference", 0.0), 99.0);
+    assert!(at("dropout", "reference", 0.5) < 30.0, "dropout did not change the grid");
+    let ours = at("dropout", "rendernet", 0.0);
+    assert!((12.0..40.0).contains(&ours), "network object PSNR {ours} on the clean scene");
+    let png = image::open(&sheet).unwrap();
+    assert_eq!((png.width(), png.height()), (6 * 128, 12 * 128));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -7,5 +7,6 @@ pub mod info;
 pub mod invert;
 pub mod output;
 pub mod render;
+pub mod stress;
 pub mod train;
 pub mod truth;

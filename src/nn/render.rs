@@ -39,6 +39,11 @@ impl Renderer {
         Ok(Renderer { preset, net, ex, size })
     }
 
+    /// Image side in pixels.
+    pub fn size(&self) -> usize {
+        self.size
+    }
+
     /// Renders `grid` (any size: resampled to the preset's input) from `view` under `light`.
     /// Returns the RGB image `[3, size, size]`, clamped to [0, 1]; errors on a view or light
     /// that [`View::validate`] or [`Light::validate`] rejects.
