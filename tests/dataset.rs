@@ -37,6 +37,7 @@ fn opts(seed: u64, shader: Shader) -> GenerateOptions {
         image: 32,
         seed,
         test_fraction: 0.3,
+        radius: rendernet::data::generate::PAPER_RADII,
         supersample: 1,
         real_dir: PathBuf::from("datasets/real"),
         progress: false,
@@ -137,7 +138,7 @@ fn reader_returns_what_was_generated() {
     let seed = shape_seed(7, 4);
     assert_eq!(s.grid, chair(seed).to_grid(16).unwrap());
     // Pose and light: the generator's draws, and within the paper's ranges.
-    let (v, l) = sample_poses(seed, 3)[1];
+    let (v, l) = sample_poses(seed, 3, rendernet::data::generate::PAPER_RADII)[1];
     assert_eq!(
         [s.view.azimuth, s.view.elevation, s.view.radius],
         v.map(f64::from)

@@ -38,6 +38,10 @@ pub struct DatasetArgs {
     /// Fraction of shapes held out for test (the last ceil(F * N) shapes).
     #[arg(long, default_value_t = 0.1)]
     test_fraction: f64,
+    /// Camera radius: `MIN,MAX` for a uniform range (the paper's 3,6.3), or one value for a
+    /// fixed distance, e.g. 3.3 for evaluation at the closest framing.
+    #[arg(long, default_value = "3,6.3", value_parser = parse_radius)]
+    radius: (f64, f64),
     /// Sub-pixels per axis averaged into each target pixel (anti-aliasing).
     #[arg(long, default_value_t = 2)]
     supersample: u32,
@@ -47,6 +51,15 @@ pub struct DatasetArgs {
     /// Output directory (shards and manifest.json).
     #[arg(long)]
     out: PathBuf,
+}
+
+fn parse_radius(s: &str) -> std::result::Result<(f64, f64), String> {
+    let v: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>().map_err(|_| format!("'{x}' is not a number"))).collect::<std::result::Result<_, _>>()?;
+    match v[..] {
+        [r] if r > 0.0 && r.is_finite() => Ok((r, r)),
+        [lo, hi] if lo > 0.0 && lo <= hi && hi.is_finite() => Ok((lo, hi)),
+        _ => Err(format!("'{s}': expected R or MIN,MAX with 0 < MIN <= MAX")),
+    }
 }
 
 fn parse_shapes(s: &str) -> std::result::Result<Shapes, String> {
@@ -66,6 +79,7 @@ pub fn run(a: DatasetArgs) -> Result<()> {
         image: a.image,
         seed: a.seed,
         test_fraction: a.test_fraction,
+        radius: a.radius,
         supersample: a.supersample,
         real_dir: a.real_dir,
         progress: true,

@@ -82,6 +82,9 @@ pub struct GenerateOptions {
     pub seed: u64,
     /// Fraction of shapes held out: the last `ceil(test_fraction * count)` go to test.
     pub test_fraction: f64,
+    /// Camera radius range `[lo, hi)`; the paper's `(3.0, 6.3)` by default ([`PAPER_RADII`]),
+    /// `(r, r)` for a fixed distance (evaluation at one framing).
+    pub radius: (f64, f64),
     /// Sub-pixels per axis of the targets (anti-aliasing).
     pub supersample: u32,
     /// Directory of meshes for [`Shapes::Real`].
@@ -99,6 +102,9 @@ pub struct Summary {
     pub seconds: f64,
 }
 
+/// The paper's camera radii (Section 4), the default of [`GenerateOptions::radius`].
+pub const PAPER_RADII: (f64, f64) = (3.0, 6.3);
+
 /// Seed of shape `i`.
 pub fn shape_seed(seed: u64, i: usize) -> u64 {
     Rng::new(seed ^ SHAPE_STREAM, i as u64).next_u64()
@@ -106,14 +112,16 @@ pub fn shape_seed(seed: u64, i: usize) -> u64 {
 
 /// The `views` random `(view, light)` pairs of the shape with seed `shape_seed`, as stored:
 /// f32 values, so what is rendered is exactly what the shard records.
-pub fn sample_poses(shape_seed: u64, views: usize) -> Vec<([f32; 3], [f32; 5])> {
+/// The radius is drawn from `radius` (one draw whatever the range, so a fixed radius leaves
+/// every other value as the paper's range would have drawn it).
+pub fn sample_poses(shape_seed: u64, views: usize, radius: (f64, f64)) -> Vec<([f32; 3], [f32; 5])> {
     let mut rng = Rng::new(shape_seed, VIEW_STREAM);
     (0..views)
         .map(|_| {
             let v = [
                 rng.range(0.0, 360.0),
                 rng.range(10.0, 170.0),
-                rng.range(3.0, 6.3),
+                rng.range(radius.0 as f32, radius.1 as f32),
             ];
             let l = [rng.range(0.0, 360.0), rng.range(20.0, 160.0), 1.0, 1.0, 1.0];
             (v, l)
@@ -274,7 +282,7 @@ impl Writer<'_> {
         let (input, truth) = shape_grids(o, &self.meshes, i)?;
         let grid_u8: Vec<u8> = input.occupancy().iter().map(|&v| to_u8(v)).collect();
         let g = GpuGrid::upload(gpu, &truth)?;
-        let poses = sample_poses(shape_seed(o.seed, i), o.views);
+        let poses = sample_poses(shape_seed(o.seed, i), o.views, o.radius);
         let light_params = Light::default();
         for chunk in poses.chunks(VIEWS_PER_SUBMIT) {
             let outs: Vec<Vec<Tensor>> = chunk
@@ -352,6 +360,10 @@ fn validate(o: &GenerateOptions) -> Result<()> {
             "res {} and truth_res {} must be in 1..=1024, image {} in 1..=8192",
             o.res, o.truth_res, o.image
         ));
+    }
+    let (lo, hi) = o.radius;
+    if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi) {
+        return bad(format!("radius range {lo}..{hi} must be positive, finite and ordered"));
     }
     if !(0.0..=1.0).contains(&o.test_fraction) {
         return bad(format!(
@@ -448,6 +460,7 @@ pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path) -> Result<Summary> {
         test,
         supersample: o.supersample,
         test_fraction: o.test_fraction,
+        radius: o.radius,
     };
     write_atomic(dir, MANIFEST, manifest.to_json().as_bytes())?;
     Ok(Summary {

@@ -66,6 +66,8 @@ pub struct Manifest {
     pub supersample: u32,
     /// Fraction of shapes held out for test (extra key, informational).
     pub test_fraction: f64,
+    /// Camera radius range (extra key; the paper's 3..6.3 when absent).
+    pub radius: (f64, f64),
 }
 
 impl Manifest {
@@ -92,6 +94,7 @@ impl Manifest {
             "test": split(&self.test),
             "supersample": self.supersample,
             "test_fraction": self.test_fraction,
+            "radius": [self.radius.0, self.radius.1],
         });
         serde_json::to_string_pretty(&v).expect("a JSON value always serialises") + "\n"
     }
@@ -198,6 +201,13 @@ impl Manifest {
                 .get("test_fraction")
                 .and_then(Value::as_f64)
                 .unwrap_or(0.0),
+            radius: match v.get("radius").and_then(Value::as_array).map(|a| a.iter().map(Value::as_f64).collect::<Vec<_>>()) {
+                None => crate::data::generate::PAPER_RADII,
+                Some(r) => match r[..] {
+                    [Some(lo), Some(hi)] if lo > 0.0 && lo <= hi => (lo, hi),
+                    _ => return Err(bad("radius", "expected [min, max] with 0 < min <= max")),
+                },
+            },
         };
         m.shader_kind()
             .map_err(|_| bad("shader", &format!("unknown shader `{}`", m.shader)))?;
