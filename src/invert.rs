@@ -109,12 +109,13 @@ impl Inverter {
         self.size
     }
 
-    fn executor(&self, gpu: &Gpu, batch: usize, loss: bool) -> Result<(RenderNet, Executor, Option<(Value, Value)>)> {
+    fn executor(&self, gpu: &Gpu, batch: usize, loss: bool, win: &Window) -> Result<(RenderNet, Executor, Option<(Value, Value)>)> {
         let p = &self.preset;
-        let mut net = RenderNet::build(p, Head::Phong(phong_of(&self.head_light)), batch, [p.cam, p.cam], false)?;
+        let mut net = RenderNet::build(p, Head::Phong(phong_of(&self.head_light)), batch, [win.cam[2], win.cam[3]], false)?;
         let mut extra = None;
         if loss {
-            let target = net.graph.input("target.image", &[batch, 3, self.size, self.size])?;
+            let [h, w] = win.pixel_dims();
+            let target = net.graph.input("target.image", &[batch, 3, h, w])?;
             let l = net.graph.apply("loss.invert", Op::Loss(Loss::Mse), &[net.image, target])?;
             extra = Some((target, l));
         }
@@ -133,26 +134,26 @@ impl Inverter {
         Ok((net, ex, extra))
     }
 
-    /// Feeds `grid` once per batch entry, and each start's pose and light.
-    fn feed(&self, gpu: &Gpu, net: &RenderNet, ex: &Executor, grid: &[f32], vars: &[Vars]) -> Result<()> {
+    /// Feeds `grid` once per batch entry, and each start's pose (seen through `win`) and light.
+    fn feed(&self, gpu: &Gpu, net: &RenderNet, ex: &Executor, grid: &[f32], vars: &[Vars], win: &Window) -> Result<()> {
         let p = &self.preset;
         let n = vars.len();
         ex.feed(gpu, net.grid, &grid.repeat(n))?;
-        let pose: Vec<f32> = vars.iter().flat_map(|v| camera::pose_for_view(&v.view(), p.input, p.cam, None)).collect();
+        let pose: Vec<f32> = vars.iter().flat_map(|v| camera::pose_for_view(&v.view(), p.input, p.cam, Some(win.cam))).collect();
         ex.feed(gpu, net.pose, &pose)?;
         let light: Vec<f32> = vars.iter().flat_map(|v| camera::light_values(&v.light(&self.head_light))).collect();
         ex.feed(gpu, net.light.expect("Phong head"), &light)
     }
 
-    /// Scores starts by silhouette: the predicted mask's area and IoU with `fg`.
-    fn silhouettes(&self, gpu: &Gpu, grid: &[f32], fg: &[bool], starts: &[Vars]) -> Result<Vec<(f64, f64)>> {
-        let (net, mut ex, _) = self.executor(gpu, starts.len(), false)?;
-        self.feed(gpu, &net, &ex, grid, starts)?;
+    /// Scores starts by silhouette inside `win`: the predicted mask's area and IoU with `fg`
+    /// (the window's pixels).
+    fn silhouettes(&self, gpu: &Gpu, grid: &[f32], fg: &[bool], starts: &[Vars], win: &Window) -> Result<Vec<(f64, f64)>> {
+        let (net, mut ex, _) = self.executor(gpu, starts.len(), false, win)?;
+        self.feed(gpu, &net, &ex, grid, starts, win)?;
         ex.forward(gpu)?;
         let mask = ex.read(gpu, net.maps.expect("Phong head")[2])?;
-        let hw = self.size * self.size;
         Ok(mask
-            .chunks(hw)
+            .chunks(fg.len())
             .map(|m| {
                 let (mut inter, mut uni, mut area) = (0usize, 0usize, 0usize);
                 for (&v, &t) in m.iter().zip(fg) {
@@ -166,24 +167,32 @@ impl Inverter {
             .collect())
     }
 
-    /// Recovers pose and light for `target` (RGB, the network's image size) of `grid`.
-    pub fn invert(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, o: &InvertOptions, mut progress: impl FnMut(usize, f64)) -> Result<Estimate> {
+    /// Checks `target`'s size and returns its foreground mask (full image).
+    fn foreground(&self, target: &Image) -> Result<Vec<bool>> {
         if target.channels != 3 || target.size != self.size {
             return Err(Error::Invalid(format!(
                 "the image is {}x{} with {} channels; preset '{}' inverts {s}x{s} RGB images",
                 target.size, target.size, target.channels, self.preset.name, s = self.size
             )));
         }
+        let hw = self.size * self.size;
+        let fg: Vec<bool> = (0..hw).map(|i| (0..3).any(|c| target.data[c * hw + i] > FOREGROUND)).collect();
+        if !fg.contains(&true) {
+            return Err(Error::Invalid("the image has no foreground (every pixel is black): nothing to invert".into()));
+        }
+        Ok(fg)
+    }
+
+    /// Recovers pose and light for `target` (RGB, the network's image size) of `grid`.
+    pub fn invert(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, o: &InvertOptions, mut progress: impl FnMut(usize, f64)) -> Result<Estimate> {
         if o.azimuths == 0 || o.elevations == 0 || o.keep == 0 {
             return Err(Error::Invalid("azimuth and elevation starts and kept starts must be at least 1".into()));
         }
-        let gv = self.grid_values(grid)?;
-        let hw = self.size * self.size;
-        let fg: Vec<bool> = (0..hw).map(|i| (0..3).any(|c| target.data[c * hw + i] > FOREGROUND)).collect();
+        let fg_full = self.foreground(target)?;
+        let win = Window::around(&self.preset, &fg_full, self.size);
+        let fg = win.crop_mask(&fg_full, self.size);
         let target_area = fg.iter().filter(|&&f| f).count() as f64;
-        if target_area == 0.0 {
-            return Err(Error::Invalid("the image has no foreground (every pixel is black): nothing to invert".into()));
-        }
+        let gv = self.grid_values(grid)?;
         let base = Light::default();
         // Coarse pass: silhouettes at the mid radius, one elevation row per batch.
         let mut scored: Vec<(f64, Vars)> = Vec::new();
@@ -192,7 +201,7 @@ impl Inverter {
             let row: Vec<Vars> = (0..o.azimuths)
                 .map(|a| Vars([360.0 * a as f64 / o.azimuths as f64, el, COARSE_RADIUS.ln(), base.azimuth, base.elevation]))
                 .collect();
-            for ((area, iou), mut v) in self.silhouettes(gpu, &gv, &fg, &row)?.into_iter().zip(row) {
+            for ((area, iou), mut v) in self.silhouettes(gpu, &gv, &fg, &row, &win)?.into_iter().zip(row) {
                 // Area scales with 1 / radius^2: the radius that matches the image's area.
                 v.0[2] = (COARSE_RADIUS * (area.max(1.0) / target_area).sqrt()).ln();
                 v.clamp();
@@ -204,30 +213,40 @@ impl Inverter {
         let starts: Vec<Vars> = scored.iter().take(RESCORED.max(o.keep)).map(|s| s.1).collect();
         let mut rescored = Vec::new();
         for chunk in starts.chunks(o.azimuths) {
-            for ((_, iou), v) in self.silhouettes(gpu, &gv, &fg, chunk)?.into_iter().zip(chunk) {
+            for ((_, iou), v) in self.silhouettes(gpu, &gv, &fg, chunk, &win)?.into_iter().zip(chunk) {
                 rescored.push((iou, *v));
             }
         }
         rescored.sort_by(|a, b| b.0.total_cmp(&a.0));
         let mut vars: Vec<Vars> = rescored.iter().take(o.keep).map(|s| s.1).collect();
-        self.refine(gpu, &gv, target, &mut vars, o, &mut progress)
+        let (best, curve) = self.refine(gpu, &gv, &win.crop_rgb(target), &mut vars, o, &mut progress, &win)?;
+        // The estimate's picture and score: the whole frame, once.
+        let full = Window::full(&self.preset, self.size);
+        let (net, mut ex, _) = self.executor(gpu, 1, false, &full)?;
+        self.feed(gpu, &net, &ex, &gv, &[best], &full)?;
+        ex.forward(gpu)?;
+        let img: Vec<f32> = ex.read(gpu, net.image)?.into_iter().map(|x| x.clamp(0.0, 1.0)).collect();
+        let mse = img.iter().zip(&target.data).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / img.len() as f64;
+        Ok(Estimate { view: best.view(), light: best.light(&self.head_light), mse, curve, image: Image { channels: 3, size: self.size, data: img } })
     }
 
-    /// The image MSE (unclamped, as the loss op computes it) of each start in `unknowns` —
+    /// The image MSE (unclamped, as the loss op computes it, over the window around the
+    /// target's foreground that the search renders) of each start in `unknowns` —
     /// `[azimuth, elevation, ln radius, light azimuth, light elevation]`, degrees — against
     /// `target`, with its gradient with respect to those five numbers: what the refinement
     /// descends, exposed for callers with their own optimiser (and for testing against
     /// finite differences).
     pub fn gradient(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, unknowns: &[[f64; 5]]) -> Result<Vec<(f64, [f64; 5])>> {
+        let win = Window::around(&self.preset, &self.foreground(target)?, self.size);
         let gv = self.grid_values(grid)?;
         let vars: Vec<Vars> = unknowns.iter().map(|&u| Vars(u)).collect();
-        let mut d = Descent::new(self, gpu, target, vars.len())?;
-        let (img, grads) = d.step(self, gpu, &gv, &vars)?;
-        let per = 3 * self.size * self.size;
+        let t = win.crop_rgb(target);
+        let mut d = Descent::new(self, gpu, &t, vars.len(), &win)?;
+        let (img, grads) = d.step(self, gpu, &gv, &vars, &win)?;
         Ok(img
-            .chunks(per)
+            .chunks(t.len())
             .zip(grads)
-            .map(|(y, g)| (y.iter().zip(&target.data).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / per as f64, g))
+            .map(|(y, g)| (y.iter().zip(&t).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / t.len() as f64, g))
             .collect())
     }
 
@@ -237,25 +256,26 @@ impl Inverter {
         Ok(camera::input_values(&g))
     }
 
-    /// Adam on every kept start at once; returns the best.
-    fn refine(&self, gpu: &Gpu, gv: &[f32], target: &Image, vars: &mut [Vars], o: &InvertOptions, progress: &mut impl FnMut(usize, f64)) -> Result<Estimate> {
+    /// Adam on every kept start at once (rendering `win` only, against the target's pixels
+    /// there, `target`); returns the best start and the best MSE after each step.
+    #[allow(clippy::too_many_arguments)]
+    fn refine(&self, gpu: &Gpu, gv: &[f32], target: &[f32], vars: &mut [Vars], o: &InvertOptions, progress: &mut impl FnMut(usize, f64), win: &Window) -> Result<(Vars, Vec<f64>)> {
         let n = vars.len();
-        let mut d = Descent::new(self, gpu, target, n)?;
+        let mut d = Descent::new(self, gpu, target, n, win)?;
         let (mut m, mut v) = (vec![[0.0f64; 5]; n], vec![[0.0f64; 5]; n]);
         let (b1, b2) = (0.9f64, 0.999f64);
         let mut curve = Vec::with_capacity(o.steps);
-        let mut best: Option<(f64, Vars, Vec<f32>)> = None;
-        let per = 3 * self.size * self.size;
+        let mut best: Option<(f64, Vars)> = None;
         for step in 0..=o.steps {
-            let (img, grads) = d.step(self, gpu, gv, vars)?;
-            for (k, y) in img.chunks(per).enumerate() {
+            let (img, grads) = d.step(self, gpu, gv, vars, win)?;
+            for (k, y) in img.chunks(target.len()).enumerate() {
                 // Scored as the user sees it: clamped to [0, 1].
-                let mse = y.iter().zip(&target.data).map(|(a, b)| ((a.clamp(0.0, 1.0) - b) as f64).powi(2)).sum::<f64>() / per as f64;
-                if best.as_ref().is_none_or(|b| mse < b.0) {
-                    best = Some((mse, vars[k], y.to_vec()));
+                let mse = y.iter().zip(target).map(|(a, b)| ((a.clamp(0.0, 1.0) - b) as f64).powi(2)).sum::<f64>() / target.len() as f64;
+                if best.is_none_or(|b| mse < b.0) {
+                    best = Some((mse, vars[k]));
                 }
             }
-            let b = best.as_ref().expect("at least one start").0;
+            let b = best.expect("at least one start").0;
             curve.push(b);
             progress(step, b);
             if step == o.steps {
@@ -276,18 +296,73 @@ impl Inverter {
                 vars[k].clamp();
             }
         }
-        let (mse, best, img) = best.expect("at least one start");
-        Ok(Estimate {
-            view: best.view(),
-            light: best.light(&self.head_light),
-            mse,
-            curve,
-            image: Image { channels: 3, size: self.size, data: img.into_iter().map(|x| x.clamp(0.0, 1.0)).collect() },
-        })
+        Ok((best.expect("at least one start").1, curve))
     }
 }
 
-/// A frozen network with an MSE loss against one target, for a batch of starts.
+/// The part of the camera grid a search renders: the target's foreground box grown by
+/// [`WINDOW_MARGIN`] camera voxels, sides rounded up to multiples of 4 (what the strides
+/// need) and clamped to the grid. Empty space costs nothing: a bunny at radius 3.3 needs
+/// about a third of the frame, a chair at radius 6 a tenth. Depth stays whole.
+#[derive(Clone, Copy, Debug)]
+struct Window {
+    /// `[h0, w0, h, w]` in camera voxels (as `nn::camera::pose_for_view` takes it).
+    cam: [usize; 4],
+    /// Image pixels per camera voxel.
+    f: usize,
+}
+
+/// Camera voxels of context kept around the foreground: silhouettes of nearby wrong poses
+/// still fall inside, and the network's border effects stay off the object.
+const WINDOW_MARGIN: usize = 6;
+
+impl Window {
+    fn full(p: &Preset, size: usize) -> Window {
+        Window { cam: [0, 0, p.cam, p.cam], f: size / p.cam }
+    }
+
+    fn around(p: &Preset, fg: &[bool], size: usize) -> Window {
+        let f = size / p.cam;
+        let (mut lo, mut hi) = ([usize::MAX; 2], [0usize; 2]);
+        for i in (0..fg.len()).filter(|&i| fg[i]) {
+            let c = [i / size / f, i % size / f];
+            for a in 0..2 {
+                lo[a] = lo[a].min(c[a]);
+                hi[a] = hi[a].max(c[a]);
+            }
+        }
+        if lo[0] == usize::MAX {
+            return Window::full(p, size);
+        }
+        let mut cam = [0; 4];
+        for a in 0..2 {
+            let len = (hi[a] - lo[a] + 1 + 2 * WINDOW_MARGIN).next_multiple_of(4).min(p.cam);
+            let centre = (lo[a] + hi[a] + 1) / 2;
+            cam[a] = centre.saturating_sub(len / 2).min(p.cam - len);
+            cam[2 + a] = len;
+        }
+        Window { cam, f }
+    }
+
+    /// `[rows, columns]` of image pixels inside.
+    fn pixel_dims(&self) -> [usize; 2] {
+        [self.cam[2] * self.f, self.cam[3] * self.f]
+    }
+
+    fn crop_rgb(&self, img: &Image) -> Vec<f32> {
+        let [h, w] = self.pixel_dims();
+        crate::train::batch::crop(img, self.cam[0] * self.f, self.cam[1] * self.f, h, w)
+    }
+
+    fn crop_mask(&self, fg: &[bool], size: usize) -> Vec<bool> {
+        let [h, w] = self.pixel_dims();
+        let (y0, x0) = (self.cam[0] * self.f, self.cam[1] * self.f);
+        (0..h).flat_map(|y| (0..w).map(move |x| fg[(y0 + y) * size + x0 + x])).collect()
+    }
+}
+
+/// A frozen network with an MSE loss against one target (a window's pixels), for a batch
+/// of starts.
 struct Descent {
     net: RenderNet,
     ex: Executor,
@@ -295,17 +370,17 @@ struct Descent {
 }
 
 impl Descent {
-    fn new(inv: &Inverter, gpu: &Gpu, target: &Image, n: usize) -> Result<Descent> {
-        let (net, ex, extra) = inv.executor(gpu, n, true)?;
+    fn new(inv: &Inverter, gpu: &Gpu, target: &[f32], n: usize, win: &Window) -> Result<Descent> {
+        let (net, ex, extra) = inv.executor(gpu, n, true, win)?;
         let (tv, loss) = extra.expect("built with a loss");
-        ex.feed(gpu, tv, &target.data.repeat(n))?;
+        ex.feed(gpu, tv, &target.repeat(n))?;
         Ok(Descent { net, ex, loss })
     }
 
     /// Renders every start and returns the images (unclamped, batch-major) and each start's
     /// gradient of its own MSE with respect to its unknowns.
-    fn step(&mut self, inv: &Inverter, gpu: &Gpu, gv: &[f32], vars: &[Vars]) -> Result<(Vec<f32>, Vec<[f64; 5]>)> {
-        inv.feed(gpu, &self.net, &self.ex, gv, vars)?;
+    fn step(&mut self, inv: &Inverter, gpu: &Gpu, gv: &[f32], vars: &[Vars], win: &Window) -> Result<(Vec<f32>, Vec<[f64; 5]>)> {
+        inv.feed(gpu, &self.net, &self.ex, gv, vars, win)?;
         self.ex.backward(gpu, self.loss)?;
         let img = self.ex.read(gpu, self.net.image)?;
         let gp = self.ex.grad(gpu, self.net.pose)?;
