@@ -63,3 +63,10 @@ impl std::error::Error for Error {
 pub(crate) fn shape_err(op: &str, msg: impl Into<String>) -> Error {
     Error::Shape { op: op.to_string(), msg: msg.into() }
 }
+
+impl From<crate::voxel::VoxelError> for Error {
+    /// Voxel and mesh errors already name the file, the field and the limit.
+    fn from(e: crate::voxel::VoxelError) -> Self {
+        Error::Invalid(e.to_string())
+    }
+}

@@ -252,7 +252,7 @@ impl Inverter {
 
     fn grid_values(&self, grid: &VoxelGrid) -> Result<Vec<f32>> {
         let p = &self.preset;
-        let g = if grid.dims() == [p.input; 3] { grid.clone() } else { grid.resample_to(p.input).map_err(|e| Error::Invalid(e.to_string()))? };
+        let g = if grid.dims() == [p.input; 3] { grid.clone() } else { grid.resample_to(p.input)? };
         Ok(camera::input_values(&g))
     }
 

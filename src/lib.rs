@@ -10,6 +10,7 @@
 //! Start with [`gpu::Gpu::new`], make [`gpu::Tensor`]s, and record ops into a compute pass.
 
 pub mod bench;
+pub mod chart;
 pub mod data;
 pub mod error;
 pub mod gpu;
@@ -25,3 +26,8 @@ pub mod voxel;
 
 pub use error::{Error, Result};
 pub use gpu::{Gpu, Tensor};
+
+/// The README's code blocks, compiled and run as doc-tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

@@ -3,7 +3,7 @@
 //! scored ([`Scores`]) against the reference renderer's image of the clean scene, so a
 //! method that renders the corruption faithfully loses points just as one that breaks.
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::metrics::Scores;
 use crate::nn::render::Renderer as NetRenderer;
@@ -89,8 +89,8 @@ pub fn value_noise(g: &VoxelGrid, a: f64, seed: u64) -> VoxelGrid {
 pub fn copies(g: &VoxelGrid, gap: Option<i64>) -> Result<VoxelGrid> {
     let n = g.dims()[0];
     let m = 3 * n / 8;
-    let small = g.resample_to(m).map_err(|e| Error::Invalid(e.to_string()))?;
-    let mut out = VoxelGrid::zeros([n, n, n]).map_err(|e| Error::Invalid(e.to_string()))?;
+    let small = g.resample_to(m)?;
+    let mut out = VoxelGrid::zeros([n, n, n])?;
     let (c, mi) = ((n / 2) as i64, m as i64);
     let places = match gap {
         None => vec![(c - mi / 2, c - mi / 2)],
@@ -122,7 +122,6 @@ fn map(g: &VoxelGrid, mut f: impl FnMut(f32) -> f32) -> VoxelGrid {
 
 /// The sweeps of issue 12 on one scene.
 fn cases(grid: &VoxelGrid, view: &View, light: &Light, seed: u64) -> Result<Vec<Case>> {
-    let err = |e: crate::voxel::VoxelError| Error::Invalid(e.to_string());
     let case = |sweep, level: f64, label: String, g: VoxelGrid| Case { sweep, level, label, grid: g, clean: grid.clone(), view: *view, light: *light };
     let mut v = Vec::new();
     for p in [0.0, 0.1, 0.2, 0.3, 0.4, 0.5] {
@@ -136,7 +135,7 @@ fn cases(grid: &VoxelGrid, view: &View, light: &Light, seed: u64) -> Result<Vec<
     }
     let n = grid.dims()[0];
     for f in [1usize, 2, 3, 4] {
-        v.push(case("downsample", f as f64, format!("{}^3", n / f), grid.resample_to(n / f).map_err(err)?));
+        v.push(case("downsample", f as f64, format!("{}^3", n / f), grid.resample_to(n / f)?));
     }
     // Level: the gap in voxels; the single copy (the yardstick) is level 99.
     for gap in [Some(8i64), Some(0), Some(-6), None] {
