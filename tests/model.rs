@@ -87,3 +87,28 @@ fn shipped_weights_render_an_unseen_shape_close_to_the_reference() {
 /// just under it (drivers differ in float rounding by far less than 0.1 dB), so a regression
 /// of the weights, a broken kernel or a mis-loaded tensor fails here.
 const MIN_OBJECT_DB: f64 = 0.0;
+
+/// Cropping the camera grid to the object (the default) leaves the default scene's picture
+/// as the whole-frame run draws it: within 0.05 dB of object PSNR against the reference at
+/// the default margin, within 0.01 dB with a margin as wide as the network's receptive field
+/// (~18 camera voxels), while the network sees at most half the frame's pixels.
+#[test]
+fn cropping_to_the_object_keeps_the_picture_and_halves_the_work() {
+    use rendernet::nn::render::{CROP_MARGIN, object_window};
+    let gpu = Gpu::new().unwrap();
+    let bunny = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/fixtures/bunny64.safetensors")).unwrap();
+    let grid = rendernet::voxel::safetensors_io::from_bytes(&bunny, "bunny64").unwrap();
+    let (view, light) = (View::default(), Light::default());
+    let opts = reference::Options { supersample: 2, ..reference::Options::default() };
+    let truth = reference::Renderer::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, 128).unwrap();
+    let score = |margin: Option<usize>| {
+        let mut net = Renderer::new(&gpu, Preset::tiny(), TINY_PHONG_WEIGHTS, "embedded", 128).unwrap().with_crop_margin(margin);
+        Scores::of(&net.render(&gpu, &grid, &view, &light).unwrap(), &truth).object_psnr
+    };
+    let (full, wide, default) = (score(None), score(Some(18)), score(Some(CROP_MARGIN)));
+    eprintln!("object PSNR: whole frame {full:.3}, margin 18 {wide:.3}, margin {CROP_MARGIN} {default:.3}");
+    assert!((wide - full).abs() <= 0.01, "{wide} vs {full}");
+    assert!((default - full).abs() <= 0.05, "{default} vs {full}");
+    let w = object_window(&grid.resample_to(32).unwrap(), &view, 64, CROP_MARGIN);
+    assert!(w[2] * w[3] * 2 <= 64 * 64, "window {w:?} is more than half the frame");
+}

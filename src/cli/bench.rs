@@ -9,7 +9,8 @@ use rendernet::ops::projection;
 use rendernet::graph::Executor;
 use rendernet::nn::rendernet::{Head, Preset, RenderNet, phong_of};
 use rendernet::ops::adam::Adam;
-use rendernet::reference::Light;
+use rendernet::nn::render::{CROP_MARGIN, object_window};
+use rendernet::reference::{Light, View};
 use rendernet::{Gpu, Result, Tensor};
 
 /// Options of `rendernet bench`.
@@ -55,7 +56,7 @@ fn pass_name(p: Pass) -> &'static str {
 const PASSES: [Pass; 3] = [Pass::Forward, Pass::BackwardInput, Pass::BackwardWeight];
 
 const KERNELS: [(&str, ConvKernel); 3] =
-    [("reference", ConvKernel::Reference), ("fast", ConvKernel::Fast), ("texture", ConvKernel::Texture)];
+    [("reference", ConvKernel::Reference), ("fast", ConvKernel::Buffers), ("texture", ConvKernel::Texture)];
 
 fn kernels(choice: &str) -> Vec<(&'static str, ConvKernel)> {
     KERNELS.into_iter().filter(|(n, _)| choice == "all" || choice.split(',').any(|c| c.trim() == *n)).collect()
@@ -76,9 +77,9 @@ fn conv_cases(gpu: &Gpu, op: &'static str, shape: &str, c: Conv, xs: &[usize], w
             }
             let (x, w, y, b) = (x.clone(), w.clone(), y.clone(), b.clone());
             let record: Recorder = match pass {
-                Pass::Forward => Box::new(move |g, p| c.forward_with(k, g, p, &x, &w, Some(&b), &y)),
-                Pass::BackwardInput => Box::new(move |g, p| c.backward_input_with(k, g, p, &y, &w, &x)),
-                Pass::BackwardWeight => Box::new(move |g, p| c.backward_weight_with(k, g, p, &x, &y, &w)),
+                Pass::Forward => Box::new(move |g, p| c.forward(k, g, p, &x, &w, Some(&b), &y)),
+                Pass::BackwardInput => Box::new(move |g, p| c.backward_input(k, g, p, &y, &w, &x)),
+                Pass::BackwardWeight => Box::new(move |g, p| c.backward_weight(k, g, p, &x, &y, &w)),
             };
             out.push(Case { op, shape: shape.into(), pass, kernel: name, flops, record });
         }
@@ -101,9 +102,9 @@ fn transposed_cases(gpu: &Gpu, shape: &str, t: ConvTranspose, xs: &[usize], ws: 
             }
             let (x, w, y, b) = (x.clone(), w.clone(), y.clone(), b.clone());
             let record: Recorder = match pass {
-                Pass::Forward => Box::new(move |g, p| t.forward_with(k, g, p, &x, &w, Some(&b), &y)),
-                Pass::BackwardInput => Box::new(move |g, p| t.backward_input_with(k, g, p, &y, &w, &x)),
-                Pass::BackwardWeight => Box::new(move |g, p| t.backward_weight_with(k, g, p, &x, &y, &w)),
+                Pass::Forward => Box::new(move |g, p| t.forward(k, g, p, &x, &w, Some(&b), &y)),
+                Pass::BackwardInput => Box::new(move |g, p| t.backward_input(k, g, p, &y, &w, &x)),
+                Pass::BackwardWeight => Box::new(move |g, p| t.backward_weight(k, g, p, &x, &y, &w)),
             };
             out.push(Case { op: "conv_transpose2d", shape: shape.into(), pass, kernel: name, flops, record });
         }
@@ -123,9 +124,9 @@ fn projection_cases(gpu: &Gpu, choice: &str) -> Result<Vec<Case>> {
         for (name, kern) in kernels(choice) {
             let (x, wt, b, y) = (x.clone(), wt.clone(), b.clone(), y.clone());
             let record: Recorder = match pass {
-                Pass::Forward => Box::new(move |g, p| projection::forward_with(kern, g, p, &x, &wt, &b, &y)),
-                Pass::BackwardInput => Box::new(move |g, p| projection::backward_input_with(kern, g, p, &y, &wt, &x)),
-                Pass::BackwardWeight => Box::new(move |g, p| projection::backward_weight_with(kern, g, p, &x, &y, &wt)),
+                Pass::Forward => Box::new(move |g, p| projection::forward(kern, g, p, &x, &wt, &b, &y)),
+                Pass::BackwardInput => Box::new(move |g, p| projection::backward_input(kern, g, p, &y, &wt, &x)),
+                Pass::BackwardWeight => Box::new(move |g, p| projection::backward_weight(kern, g, p, &x, &y, &wt)),
             };
             out.push(Case { op: "projection", shape: shape.clone(), pass, kernel: name, flops, record });
         }
@@ -180,8 +181,12 @@ fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine) -> Result<Vec<(String, serd
     let p = Preset::tiny();
     let head = Head::Phong(phong_of(&Light::default()));
     let mut rows = Vec::new();
-    for (pass, win, train) in [("forward", p.cam, false), ("train_step", p.cam / 2, true)] {
-        let net = RenderNet::build(&p, head, 1, [win, win], train)?;
+    // The default scene's window: `render` crops the camera grid to the object (nn::render).
+    let bunny = rendernet::voxel::safetensors_io::from_bytes(super::truth::BUNNY, "bunny64")?.resample_to(p.input)?;
+    let crop = object_window(&bunny, &View::default(), p.cam, CROP_MARGIN);
+    let cases = [("forward", [p.cam; 2], false, ""), ("forward", [crop[2], crop[3]], false, " (bunny crop)"), ("train_step", [p.cam / 2; 2], true, "")];
+    for (pass, win, train, what) in cases {
+        let net = RenderNet::build(&p, head, 1, win, train)?;
         let flops = net.graph.forward_flops() * if train { 3.0 } else { 1.0 };
         let mut ex = Executor::new(gpu, net.graph.clone(), 0)?;
         let step = |ex: &mut Executor| match net.loss {
@@ -197,17 +202,17 @@ fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine) -> Result<Vec<(String, serd
         }
         let ms = bench::median(&ms);
         let gflops = flops / (ms * 1e6);
-        let img = p.image_for(win);
-        let shape = format!("{} {}^3 grid, {img}x{img} image, batch 1", p.name, p.input);
+        let (ih, iw) = (p.image_for(win[0]), p.image_for(win[1]));
+        let shape = format!("{} {}^3 grid, {ih}x{iw} image{what}, batch 1", p.name, p.input);
         let mut json = m.row("rendernet", &shape, pass, "auto", ms, gflops);
         json["dispatches"] = stats.dispatches.into();
         json["submits_per_step"] = stats.submits.into();
-        json["peak_bytes"] = stats.peak_bytes.into();
+        json["peak_bytes"] = stats.pool_bytes.into();
         json["tensor_bytes"] = stats.tensor_bytes.into();
         let text = format!(
             "{:<17} {:<34} {:<16} {:<9} {ms:>10.1} {gflops:>9.2} {:>8.1}%  ({} dispatches, {} submit, peak {:.1} MiB of {:.1} MiB tensors)",
             "rendernet", shape, pass, "auto", 100.0 * gflops / m.ceiling, stats.dispatches, stats.submits,
-            stats.peak_bytes as f64 / 1048576.0, stats.tensor_bytes as f64 / 1048576.0
+            stats.pool_bytes as f64 / 1048576.0, stats.tensor_bytes as f64 / 1048576.0
         );
         rows.push((text, json));
     }

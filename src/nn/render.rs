@@ -16,10 +16,19 @@ pub const TINY_PHONG_WEIGHTS: &[u8] = include_bytes!("../../weights/tiny-phong.s
 /// A RenderNet ready to render, for one image size.
 pub struct Renderer {
     preset: Preset,
-    net: RenderNet,
-    ex: Executor,
+    weights: Vec<u8>,
+    name: String,
+    /// Networks built so far, by camera window `[h, w]` (one per window size).
+    nets: Vec<([usize; 2], RenderNet, Executor)>,
     size: usize,
+    margin: Option<usize>,
 }
+
+/// Camera voxels of context [`Renderer`] keeps around the object's projected bounding box.
+/// The network's receptive field reaches ~18 camera voxels in the image plane, but its
+/// response to empty space fades within a few: with 2 the default scene's image changes by
+/// less than 0.05 dB against the reference (tests/model.rs measures it).
+pub const CROP_MARGIN: usize = 2;
 
 impl Renderer {
     /// Builds the Phong network of `preset` for `size`-pixel images (a multiple of
@@ -30,13 +39,32 @@ impl Renderer {
         if size == 0 || size % (4 * f) != 0 {
             return Err(Error::Invalid(format!("image size {size} must be a positive multiple of {}", 4 * f)));
         }
-        let cam_hw = size / f;
-        let net = RenderNet::build(&preset, Head::Phong(phong_of(&Light::default())), 1, [cam_hw, cam_hw], false)?;
+        let mut r = Renderer { preset, weights: weights.to_vec(), name: name.to_string(), nets: Vec::new(), size, margin: Some(CROP_MARGIN) };
+        // Built now so bad weights fail here, not at the first render.
+        let full = size / f;
+        r.net_for(gpu, [full, full])?;
+        Ok(r)
+    }
+
+    /// Crops the camera grid to the object's projected box grown by `margin` camera voxels
+    /// (`Some`, default [`CROP_MARGIN`]: empty space costs nothing), or renders the whole
+    /// frame (`None`).
+    pub fn with_crop_margin(mut self, margin: Option<usize>) -> Renderer {
+        self.margin = margin;
+        self
+    }
+
+    fn net_for(&mut self, gpu: &Gpu, hw: [usize; 2]) -> Result<usize> {
+        if let Some(i) = self.nets.iter().position(|n| n.0 == hw) {
+            return Ok(i);
+        }
+        let net = RenderNet::build(&self.preset, Head::Phong(phong_of(&Light::default())), 1, hw, false)?;
         let mut ex = Executor::new(gpu, net.graph.clone(), 0)?;
-        ex.load_params_bytes(gpu, weights, name)?;
+        ex.load_params_bytes(gpu, &self.weights, &self.name)?;
         ex.training = false;
         ex.keep(net.image);
-        Ok(Renderer { preset, net, ex, size })
+        self.nets.push((hw, net, ex));
+        Ok(self.nets.len() - 1)
     }
 
     /// Image side in pixels.
@@ -51,19 +79,74 @@ impl Renderer {
         // Checked here, not left to the pose tensor's NaN guard, which can only name 'pose'.
         view.validate().map_err(|m| Error::Invalid(format!("render: view: {m}")))?;
         light.validate().map_err(|m| Error::Invalid(format!("render: light: {m}")))?;
-        let p = &self.preset;
-        let g = if grid.dims() == [p.input; 3] {
-            grid.clone()
-        } else {
-            grid.resample_to(p.input).map_err(|e| Error::Invalid(e.to_string()))?
+        let p = self.preset.clone();
+        let g = if grid.dims() == [p.input; 3] { grid.clone() } else { grid.resample_to(p.input)? };
+        let f = p.image_for(p.cam) / p.cam;
+        let cam_hw = self.size / f;
+        let win = match self.margin {
+            Some(m) => object_window(&g, view, cam_hw, m),
+            None => [0, 0, cam_hw, cam_hw],
         };
-        let cam_hw = self.size / (p.image_for(p.cam) / p.cam);
-        self.ex.feed(gpu, self.net.grid, &camera::input_values(&g))?;
-        self.ex.feed(gpu, self.net.pose, &camera::pose_for_view(view, p.input, cam_hw, None))?;
-        let l = self.net.light.expect("the Phong head has a light input");
-        self.ex.feed(gpu, l, &camera::light_values(light))?;
-        self.ex.forward(gpu)?;
-        let data = self.ex.read(gpu, self.net.image)?.into_iter().map(|v| v.clamp(0.0, 1.0)).collect();
+        let i = self.net_for(gpu, [win[2], win[3]])?;
+        let (_, net, ex) = &mut self.nets[i];
+        ex.feed(gpu, net.grid, &camera::input_values(&g))?;
+        ex.feed(gpu, net.pose, &camera::pose_for_view(view, p.input, cam_hw, Some(win)))?;
+        let l = net.light.expect("the Phong head has a light input");
+        ex.feed(gpu, l, &camera::light_values(light))?;
+        ex.forward(gpu)?;
+        let part = ex.read(gpu, net.image)?;
+        // Pasted into a black frame: outside the window is empty space.
+        let (h, w) = (win[2] * f, win[3] * f);
+        let mut data = vec![0.0; 3 * self.size * self.size];
+        for c in 0..3 {
+            for y in 0..h {
+                let dst = (c * self.size + win[0] * f + y) * self.size + win[1] * f;
+                let src = (c * h + y) * w;
+                for (d, s) in data[dst..dst + w].iter_mut().zip(&part[src..src + w]) {
+                    *d = s.clamp(0.0, 1.0);
+                }
+            }
+        }
         Ok(Image { channels: 3, size: self.size, data })
     }
+}
+
+/// The camera-grid window `[h0, w0, h, w]` (sides multiples of 4, inside the `cam_hw` grid)
+/// covering every voxel of `grid` above zero as `view` projects it, grown by `margin`.
+/// The whole frame when the grid is empty.
+pub fn object_window(grid: &VoxelGrid, view: &View, cam_hw: usize, margin: usize) -> [usize; 4] {
+    let dims = grid.dims();
+    // Object frame (reference::camera): voxel centre i along axis a sits at (i + 0.5 - n_a/2) / L.
+    let l = *dims.iter().max().expect("three axes") as f64;
+    let r = view.rotation().as_dmat3();
+    let k = cam_hw as f64 * view.scale() / 2.0; // camera voxels per object unit
+    let centre = (cam_hw as f64 - 1.0) / 2.0;
+    let reach = 3f64.sqrt() / 2.0 / l * k; // a voxel's half diagonal, projected
+    let (mut rows, mut cols) = ((f64::MAX, f64::MIN), (f64::MAX, f64::MIN));
+    for d in 0..dims[0] {
+        for h in 0..dims[1] {
+            for w in 0..dims[2] {
+                if grid.get(d, h, w) <= 0.0 {
+                    continue;
+                }
+                let at = |i: usize, a: usize| (i as f64 + 0.5 - dims[a] as f64 / 2.0) / l;
+                let c = r * glam::DVec3::new(at(d, 0), at(h, 1), at(w, 2));
+                // Camera grid: rows down the image (-y), columns right (+x), voxel centres at integers.
+                let (row, col) = (centre - c.y * k, centre + c.x * k);
+                rows = (rows.0.min(row - reach), rows.1.max(row + reach));
+                cols = (cols.0.min(col - reach), cols.1.max(col + reach));
+            }
+        }
+    }
+    if rows.0 == f64::MAX {
+        return [0, 0, cam_hw, cam_hw];
+    }
+    let span = |(a, b): (f64, f64)| -> (usize, usize) {
+        let first = (a.floor() - margin as f64).max(0.0) as usize;
+        let last = ((b.ceil() + margin as f64).max(0.0) as usize).min(cam_hw - 1);
+        let len = (last.saturating_sub(first) + 1).next_multiple_of(4).min(cam_hw);
+        (first.min(cam_hw - len), len)
+    };
+    let ((h0, h), (w0, w)) = (span(rows), span(cols));
+    [h0, w0, h, w]
 }
