@@ -134,8 +134,8 @@ fn forward(c: &Case, rng: &mut Rng) -> Forward {
     let b = f32_round(&rng.vec(c.co, -1.0, 1.0));
     let (tx, tw, tb, ty) = (upload(&xs, &x), upload(&ws, &w), upload(&[c.co], &b), zeros(&ys));
     run(|p| match c.op {
-        Op::Conv(op) => op.forward_with(c.kernel, gpu(), p, &tx, &tw, Some(&tb), &ty),
-        Op::Transposed(op) => op.forward_with(c.kernel, gpu(), p, &tx, &tw, Some(&tb), &ty),
+        Op::Conv(op) => op.forward(c.kernel, gpu(), p, &tx, &tw, Some(&tb), &ty),
+        Op::Transposed(op) => op.forward(c.kernel, gpu(), p, &tx, &tw, Some(&tb), &ty),
     });
     let want = reference(c, &g, &x, &w, Some(&b));
     Forward { y: download(&ty), x, w, b, want, g }
@@ -154,12 +154,12 @@ fn check(c: &Case, seed: u64) {
     run(|p| {
         match c.op {
             Op::Conv(op) => {
-                op.backward_input_with(c.kernel, gpu(), p, &tr, &tw, &tdx)?;
-                op.backward_weight_with(c.kernel, gpu(), p, &tx, &tr, &tdw)?;
+                op.backward_input(c.kernel, gpu(), p, &tr, &tw, &tdx)?;
+                op.backward_weight(c.kernel, gpu(), p, &tx, &tr, &tdw)?;
             }
             Op::Transposed(op) => {
-                op.backward_input_with(c.kernel, gpu(), p, &tr, &tw, &tdx)?;
-                op.backward_weight_with(c.kernel, gpu(), p, &tx, &tr, &tdw)?;
+                op.backward_input(c.kernel, gpu(), p, &tr, &tw, &tdx)?;
+                op.backward_weight(c.kernel, gpu(), p, &tx, &tr, &tdw)?;
             }
         }
         conv::backward_bias(gpu(), p, &tr, &tdb)
@@ -261,11 +261,11 @@ fn conv_transpose3d_same_and_explicit() {
     check(&transposed3d([3, 2, 3], [1, 2, 2], explicit([1, 0, 2], [0, 1, 1]), None), 35);
 }
 
-/// Every case above, again with each family of tiled kernels forced (`ConvKernel::Fast`
+/// Every case above, again with each family of tiled kernels forced (`ConvKernel::Buffers`
 /// reads buffers, `ConvKernel::Texture` textures and subgroup shuffles for the forward and
 /// backward-input passes).
 fn check_fast(c: Case, seed: u64) {
-    check(&Case { kernel: ConvKernel::Fast, ..c }, seed);
+    check(&Case { kernel: ConvKernel::Buffers, ..c }, seed);
     check(&Case { kernel: ConvKernel::Texture, ..c }, seed);
 }
 
@@ -333,14 +333,14 @@ fn passes(c: &Case, kernel: ConvKernel, seed: u64) -> [Vec<f64>; 3] {
     let (ty, tdx, tdw) = (zeros(&ys), zeros(&xs), zeros(&ws));
     run(|p| match c.op {
         Op::Conv(op) => {
-            op.forward_with(kernel, gpu(), p, &tx, &tw, Some(&tb), &ty)?;
-            op.backward_input_with(kernel, gpu(), p, &tr, &tw, &tdx)?;
-            op.backward_weight_with(kernel, gpu(), p, &tx, &tr, &tdw)
+            op.forward(kernel, gpu(), p, &tx, &tw, Some(&tb), &ty)?;
+            op.backward_input(kernel, gpu(), p, &tr, &tw, &tdx)?;
+            op.backward_weight(kernel, gpu(), p, &tx, &tr, &tdw)
         }
         Op::Transposed(op) => {
-            op.forward_with(kernel, gpu(), p, &tx, &tw, Some(&tb), &ty)?;
-            op.backward_input_with(kernel, gpu(), p, &tr, &tw, &tdx)?;
-            op.backward_weight_with(kernel, gpu(), p, &tx, &tr, &tdw)
+            op.forward(kernel, gpu(), p, &tx, &tw, Some(&tb), &ty)?;
+            op.backward_input(kernel, gpu(), p, &tr, &tw, &tdx)?;
+            op.backward_weight(kernel, gpu(), p, &tx, &tr, &tdw)
         }
     });
     [download(&ty), download(&tdx), download(&tdw)]
@@ -381,9 +381,9 @@ fn fast_matches_reference_on_random_shapes() {
         let padding = if seed % 3 == 1 { explicit(before, after) } else { Padding::Same };
         let h = Conv { kernel, stride, padding };
         let op = if seed % 4 < 2 { Op::Conv(h) } else { Op::Transposed(ConvTranspose { conv: h }) };
-        let c = Case { op, kernel: ConvKernel::Fast, d2, n, ci, co, input, output: None };
+        let c = Case { op, kernel: ConvKernel::Buffers, d2, n, ci, co, input, output: None };
         let slow = passes(&c, ConvKernel::Reference, seed);
-        for kernel in [ConvKernel::Fast, ConvKernel::Texture] {
+        for kernel in [ConvKernel::Buffers, ConvKernel::Texture] {
             let fast = passes(&c, kernel, seed);
             for (k, what) in ["forward", "dx", "dw"].iter().enumerate() {
                 assert_close(&format!("seed {seed}: {kernel:?} {c:?} {what}"), &fast[k], &slow[k], 1e-3, 1e-4);
@@ -433,16 +433,16 @@ fn bad_shapes_are_errors() {
     let run = |f: &dyn Fn(&mut wgpu::ComputePass<'_>) -> rendernet::Result<()>| gpu().run(|p| f(p));
     // Channel mismatch: weights expect 4 input channels.
     let w4 = zeros(&[5, 4, 3, 3, 3]);
-    expect_err("channels", run(&|p| c.forward(gpu(), p, &x, &w4, Some(&b), &y)), "channels");
+    expect_err("channels", run(&|p| c.forward(ConvKernel::Auto, gpu(), p, &x, &w4, Some(&b), &y)), "channels");
     // Wrong output shape, wrong bias, wrong kernel size.
     let y_bad = zeros(&[2, 5, 5, 6, 6]);
-    expect_err("output", run(&|p| c.forward(gpu(), p, &x, &w, Some(&b), &y_bad)), "conv_forward");
-    expect_err("bias", run(&|p| c.forward(gpu(), p, &x, &w, Some(&zeros(&[4])), &y)), "bias");
+    expect_err("output", run(&|p| c.forward(ConvKernel::Auto, gpu(), p, &x, &w, Some(&b), &y_bad)), "conv_forward");
+    expect_err("bias", run(&|p| c.forward(ConvKernel::Auto, gpu(), p, &x, &w, Some(&zeros(&[4])), &y)), "bias");
     let w_k = zeros(&[5, 3, 3, 3, 2]);
-    expect_err("kernel", run(&|p| c.forward(gpu(), p, &x, &w_k, None, &y)), "kernel");
+    expect_err("kernel", run(&|p| c.forward(ConvKernel::Auto, gpu(), p, &x, &w_k, None, &y)), "kernel");
     // Backward passes check their gradients' shapes.
-    expect_err("dx", run(&|p| c.backward_input(gpu(), p, &y_bad, &w, &x)), "dy");
-    expect_err("dw", run(&|p| c.backward_weight(gpu(), p, &x, &y, &w4)), "channels");
+    expect_err("dx", run(&|p| c.backward_input(ConvKernel::Auto, gpu(), p, &y_bad, &w, &x)), "dy");
+    expect_err("dw", run(&|p| c.backward_weight(ConvKernel::Auto, gpu(), p, &x, &y, &w4)), "channels");
     expect_err("db", run(&|p| conv::backward_bias(gpu(), p, &y, &zeros(&[4]))), "db");
     // 2D input with a 3D kernel; a kernel larger than the padded input.
     let c2 = Conv::conv2d([3, 3], [1, 1], Padding::Same);
@@ -455,9 +455,9 @@ fn bad_shapes_are_errors() {
     let (tx, tw) = (zeros(&[2, 3, 4, 5]), zeros(&[3, 5, 4, 4]));
     assert_eq!(t.output_shape(tx.shape(), tw.shape()).unwrap(), vec![2, 5, 8, 10]);
     let ty_bad = zeros(&[2, 5, 8, 11]);
-    expect_err("transposed y", run(&|p| t.forward(gpu(), p, &tx, &tw, None, &ty_bad)), "does not fit");
+    expect_err("transposed y", run(&|p| t.forward(ConvKernel::Auto, gpu(), p, &tx, &tw, None, &ty_bad)), "does not fit");
     let tw_bad = zeros(&[5, 3, 4, 4]);
-    expect_err("transposed w", run(&|p| t.forward(gpu(), p, &tx, &tw_bad, None, &zeros(&[2, 5, 8, 10]))), "conv_transpose");
+    expect_err("transposed w", run(&|p| t.forward(ConvKernel::Auto, gpu(), p, &tx, &tw_bad, None, &zeros(&[2, 5, 8, 10]))), "conv_transpose");
     assert!(t.output_shape(&[2, 4, 4, 5], tw.shape()).is_err());
 }
 

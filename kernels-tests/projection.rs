@@ -5,6 +5,7 @@ mod common;
 mod reference;
 use common::*;
 use reference::projection::projection as proj_ref;
+use rendernet::ops::conv::ConvKernel;
 use rendernet::ops::projection;
 
 #[test]
@@ -32,9 +33,9 @@ fn check(n: usize, c: usize, d: usize, h: usize, w: usize, o: usize, seed: u64) 
     let tr = upload(&[n, o, h, w], &r);
     let (tdx, tdw, tdb) = (zeros(&xs), zeros(&[o, k, 1, 1]), zeros(&[o]));
     run(|p| {
-        projection::forward(gpu(), p, &tx, &tw, &tb, &ty)?;
-        projection::backward_input(gpu(), p, &tr, &tw, &tdx)?;
-        projection::backward_weight(gpu(), p, &tx, &tr, &tdw)?;
+        projection::forward(ConvKernel::Auto, gpu(), p, &tx, &tw, &tb, &ty)?;
+        projection::backward_input(ConvKernel::Auto, gpu(), p, &tr, &tw, &tdx)?;
+        projection::backward_weight(ConvKernel::Auto, gpu(), p, &tx, &tr, &tdw)?;
         projection::backward_bias(gpu(), p, &tr, &tdb)
     });
     // Sums of K <= 21 (forward), O <= 19 (dx), N*S <= 66 (dw, db) terms of size <= 1.
@@ -48,6 +49,6 @@ fn check(n: usize, c: usize, d: usize, h: usize, w: usize, o: usize, seed: u64) 
 #[test]
 fn projection_rejects_mismatched_weights() {
     let (tx, tw, tb, ty) = (zeros(&[1, 2, 3, 4, 4]), zeros(&[5, 7, 1, 1]), zeros(&[5]), zeros(&[1, 5, 4, 4]));
-    let err = gpu().run(|p| projection::forward(gpu(), p, &tx, &tw, &tb, &ty)).unwrap_err();
+    let err = gpu().run(|p| projection::forward(ConvKernel::Auto, gpu(), p, &tx, &tw, &tb, &ty)).unwrap_err();
     assert!(err.to_string().contains("K = C*D = 6"), "{err}");
 }

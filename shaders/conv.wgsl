@@ -10,6 +10,8 @@
 // x reading zero ("pad" is the padding before each axis; the padding after is implied by
 // the output size).
 
+// The first fields of shaders/conv_fast.wgsl's Params, in its order (src/ops/conv.rs fills
+// both from one struct; the tiled kernels' fields follow in the buffer, unread here).
 struct Params {
     n: u32, ci: u32, co: u32,
     id: u32, ih: u32, iw: u32,

@@ -34,16 +34,18 @@ struct Params {
     kd: u32, kh: u32, kw: u32,
     sd: u32, sh: u32, sw: u32,
     pd: u32, ph: u32, pw: u32,
+    has_bias: u32,
+    // Invocations that do work.
+    total: u32,
+    // The fields above are shaders/conv.wgsl's whole Params: one Rust struct
+    // (src/ops/conv.rs) serves both files.
     // Padded channel counts of the packed layouts: cpad (a multiple of 4) for packed
     // activations and the weights' ci axis, co16 = ceil(co / 16) for the weights' co axis.
     cpad: u32, co16: u32,
     // Weight packing: 1 to flip the kernel and swap channel axes (backward input).
     flip: u32,
-    has_bias: u32,
     // Backward weight: number of chunks of output rows (n, od, oh) and rows per chunk.
     nchunks: u32, chunk: u32,
-    // Invocations that do work.
-    total: u32,
     // Taps folded into the channel axis (1: none; see conv_fast_pack_folded): weight packing
     // and conv_fast_weight_sum map folded channel c' = c * fold + f back to channel c, tap f.
     fold: u32,

@@ -20,6 +20,7 @@ pub mod metrics;
 pub mod nn;
 pub mod ops;
 pub mod reference;
+pub mod rng;
 pub mod stress;
 pub mod train;
 pub mod voxel;

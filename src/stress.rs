@@ -9,7 +9,7 @@ use crate::metrics::Scores;
 use crate::nn::render::Renderer as NetRenderer;
 use crate::reference::{Image, Light, Options, Renderer, Shader, View};
 use crate::voxel::VoxelGrid;
-use crate::voxel::shapes::Rng;
+use crate::rng::SplitMix64;
 
 /// One scored image of a sweep.
 #[derive(Clone, Debug)]
@@ -41,7 +41,7 @@ struct Case {
 
 /// Occupied voxels (> 0.5) switched off with probability `p`.
 pub fn dropout(g: &VoxelGrid, p: f64, seed: u64) -> VoxelGrid {
-    let mut r = Rng::new(seed, 0xD40F);
+    let mut r = SplitMix64::new(seed, 0xD40F);
     map(g, |v| if v > 0.5 && (r.unit() as f64) < p { 0.0 } else { v })
 }
 
@@ -62,7 +62,7 @@ pub fn salt(g: &VoxelGrid, p: f64, seed: u64) -> VoxelGrid {
         }
     }
     let mut out = g.clone();
-    let mut r = Rng::new(seed, 0x5A17);
+    let mut r = SplitMix64::new(seed, 0x5A17);
     for z in 0..d {
         for y in 0..h {
             for x in 0..w {
@@ -78,7 +78,7 @@ pub fn salt(g: &VoxelGrid, p: f64, seed: u64) -> VoxelGrid {
 
 /// Every value plus uniform noise in `[-a, a]`, clamped to `[0, 1]` (soft grids).
 pub fn value_noise(g: &VoxelGrid, a: f64, seed: u64) -> VoxelGrid {
-    let mut r = Rng::new(seed, 0x7015);
+    let mut r = SplitMix64::new(seed, 0x7015);
     map(g, |v| (v + (2.0 * r.unit() - 1.0) * a as f32).clamp(0.0, 1.0))
 }
 

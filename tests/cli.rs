@@ -344,5 +344,14 @@ fn stress_runs_every_sweep_and_scores_against_the_clean_scene() {
     assert!((12.0..40.0).contains(&ours), "network object PSNR {ours} on the clean scene");
     let png = image::open(&sheet).unwrap();
     assert_eq!((png.width(), png.height()), (6 * 128, 12 * 128));
+    // One chart per sweep beside the sheet (no --charts): <out stem>-<sweep>.png.
+    for sweep in ["dropout", "salt", "value-noise", "downsample", "two-objects", "view"] {
+        let chart = dir.join(format!("sheet-{sweep}.png"));
+        let img = image::open(&chart).unwrap_or_else(|e| panic!("{}: {e}", chart.display()));
+        assert_eq!((img.width(), img.height()), (800, 480), "{sweep}");
+    }
+    // A --charts folder that does not exist fails before any rendering, naming the flag.
+    let err = run_err(&["stress", "--out", sheet.to_str().unwrap(), "--charts", dir.join("missing").to_str().unwrap()], &[]);
+    assert!(err.contains("--charts"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -40,7 +40,6 @@ fn opts(seed: u64, shader: Shader) -> GenerateOptions {
         radius: rendernet::data::generate::PAPER_RADII,
         supersample: 1,
         real_dir: PathBuf::from("datasets/real"),
-        progress: false,
     }
 }
 
@@ -49,7 +48,7 @@ fn phong_dir() -> &'static PathBuf {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
         let d = tmp("phong");
-        data::generate(gpu(), &opts(7, Shader::Phong), &d).unwrap();
+        data::generate(gpu(), &opts(7, Shader::Phong), &d, |_, _| {}).unwrap();
         d
     })
 }
@@ -79,7 +78,7 @@ fn fnv1a(b: &[u8]) -> u64 {
 #[test]
 fn same_seed_gives_same_bytes() {
     let again = tmp("again");
-    data::generate(gpu(), &opts(7, Shader::Phong), &again).unwrap();
+    data::generate(gpu(), &opts(7, Shader::Phong), &again, |_, _| {}).unwrap();
     let (a, b) = (files(phong_dir()), files(&again));
     let names: Vec<_> = a.iter().map(|(n, _)| n.as_str()).collect();
     assert_eq!(
@@ -100,7 +99,7 @@ fn same_seed_gives_same_bytes() {
     }
     // And the seed matters.
     let other = tmp("other-seed");
-    data::generate(gpu(), &opts(8, Shader::Phong), &other).unwrap();
+    data::generate(gpu(), &opts(8, Shader::Phong), &other, |_, _| {}).unwrap();
     assert_ne!(
         fnv1a(&files(&other)[2].1),
         fnv1a(&a[2].1),
@@ -209,7 +208,7 @@ fn other_shaders_store_one_image_tensor() {
     let mut o = opts(3, Shader::Depth);
     o.count = 2;
     o.shapes = Shapes::Mixed;
-    data::generate(gpu(), &o, &d).unwrap();
+    data::generate(gpu(), &o, &d, |_, _| {}).unwrap();
     let ds = Dataset::open(&d).unwrap();
     assert_eq!(ds.manifest.shader, "depth");
     let s = ds.split(Split::Train).get(0).unwrap();
@@ -302,6 +301,8 @@ fn malformed_shard_names_file_and_tensor() {
     assert!(open_err(&d).contains("test-00000.safetensors"));
 }
 
+// Runs the binary, which needs the `cli` feature.
+#[cfg(feature = "cli")]
 #[test]
 fn cli_writes_a_dataset_and_explains_missing_real_meshes() {
     let d = tmp("cli");

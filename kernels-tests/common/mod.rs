@@ -22,23 +22,22 @@ pub fn gpu() -> &'static Gpu {
     })
 }
 
-/// SplitMix64: small, seeded, reproducible.
-pub struct Rng(pub u64);
+/// The crate's SplitMix64: `Rng(seed)`, small and reproducible.
+pub use rendernet::rng::SplitMix64 as Rng;
 
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-        z ^ (z >> 31)
-    }
+/// Test draws on top of [`Rng`].
+pub trait Draws {
     /// Uniform in [lo, hi).
-    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
-    }
+    fn uniform(&mut self, lo: f64, hi: f64) -> f64;
     /// `n` values uniform in [lo, hi).
-    pub fn vec(&mut self, n: usize, lo: f64, hi: f64) -> Vec<f64> {
+    fn vec(&mut self, n: usize, lo: f64, hi: f64) -> Vec<f64>;
+}
+
+impl Draws for Rng {
+    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next_f64()
+    }
+    fn vec(&mut self, n: usize, lo: f64, hi: f64) -> Vec<f64> {
         (0..n).map(|_| self.uniform(lo, hi)).collect()
     }
 }

@@ -82,9 +82,14 @@ pub fn run(a: DatasetArgs) -> Result<()> {
         radius: a.radius,
         supersample: a.supersample,
         real_dir: a.real_dir,
-        progress: true,
     };
-    let s = data::generate(&gpu, &o, &a.out)?;
+    let bar = indicatif::ProgressBar::new((o.count * o.views) as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{elapsed_precise} {wide_bar} {pos}/{len} samples {per_sec} eta {eta}")
+            .expect("valid template"),
+    );
+    let s = data::generate(&gpu, &o, &a.out, |done, _| bar.set_position(done as u64))?;
+    bar.finish();
     let n = s.manifest.train.count + s.manifest.test.count;
     println!(
         "wrote {} train + {} test samples ({} shapes x {} views) to {} in {:.1} s ({:.1} samples/s, on {})",

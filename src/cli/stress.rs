@@ -7,10 +7,12 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rendernet::nn::render::{Renderer, TINY_PHONG_WEIGHTS};
 use rendernet::nn::rendernet::Preset;
+use rendernet::chart::{self, Cap, Options};
+use rendernet::metrics::PSNR_CAP;
 use rendernet::reference;
 use rendernet::stress::{self, Row};
 use rendernet::{Error, Gpu, Result};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Flags of `rendernet stress`.
@@ -32,6 +34,10 @@ pub struct StressArgs {
     /// the corrupted grid, one column per level.
     #[arg(long, default_value = "stress.png")]
     out: PathBuf,
+    /// Folder for one chart per sweep, `<out stem>-<sweep>.png`: object PSNR against the
+    /// level, one line per method (default: the folder of `--out`).
+    #[arg(long, value_name = "DIR")]
+    charts: Option<PathBuf>,
     /// Print JSON rows (sweep, level, label, method, scores) instead of tables.
     #[arg(long)]
     json: bool,
@@ -41,6 +47,10 @@ pub struct StressArgs {
 pub fn run(a: StressArgs) -> Result<()> {
     let t0 = Instant::now();
     super::output::check_png_out(&a.out)?;
+    let charts = a.charts.clone().unwrap_or_else(|| a.out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new(".")).to_path_buf());
+    if !charts.is_dir() {
+        return Err(Error::Invalid(format!("--charts {}: not a folder that exists", charts.display())));
+    }
     let preset = Preset::by_name(&a.preset)?;
     let size = preset.image_for(preset.cam);
     a.scene.validate(size)?;
@@ -59,6 +69,8 @@ pub fn run(a: StressArgs) -> Result<()> {
     })?;
     bar.finish_and_clear();
     reference::write_png(&image::DynamicImage::ImageRgb8(contact_sheet(&rows, size)), &a.out)?;
+    let stem = a.out.file_stem().and_then(|s| s.to_str()).unwrap_or("stress");
+    let written = write_charts(&rows, &charts, stem)?;
     if a.json {
         let j: Vec<serde_json::Value> = rows
             .iter()
@@ -84,18 +96,81 @@ pub fn run(a: StressArgs) -> Result<()> {
         println!("  {:<22} {:>22} {:>22}", ours.label, s(ours), s(theirs));
     }
     println!("\nwrote {} in {:.1} s on {}", a.out.display(), t0.elapsed().as_secs_f64(), gpu.info.name);
+    println!("charts: {}", written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
     Ok(())
+}
+
+/// The sweeps in the order `stress::run` gives them.
+fn sweeps(rows: &[Row]) -> Vec<&'static str> {
+    let mut v: Vec<&'static str> = Vec::new();
+    for r in rows {
+        if !v.contains(&r.sweep) {
+            v.push(r.sweep);
+        }
+    }
+    v
+}
+
+/// How a sweep's level reads on a chart: the x axis label, and either a scale for a numeric
+/// axis or `None` for a categorical one (the levels' labels in sweep order: a view index or
+/// a gap with "one copy" at level 99 have no meaningful numeric distance).
+fn sweep_axis(sweep: &str) -> (&'static str, &'static str, Option<f64>) {
+    match sweep {
+        "dropout" => ("Voxel dropout", "occupied voxels switched off (%)", Some(100.0)),
+        "salt" => ("Salt noise", "empty voxels inside the object's bounding box switched on (%)", Some(100.0)),
+        "value-noise" => ("Value noise", "amplitude a of uniform noise in [-a, a] added to every occupancy value", Some(1.0)),
+        "downsample" => ("Downsampled grid", "grid resolution after downsampling (voxels)", None),
+        "two-objects" => ("Two objects", "two copies at 3/8 size: gap between them in voxels (negative: overlapping)", None),
+        "view" => ("Extreme view and light", "camera or light change from the default scene (clean grid)", None),
+        _ => ("Sweep", "level", Some(1.0)),
+    }
+}
+
+/// One chart per sweep in `dir`, `<stem>-<sweep>.png`: object PSNR against the level, a
+/// line per method, on one y scale for all sweeps; identical images (PSNR at the cap) sit in
+/// a band on top. Returns the paths.
+fn write_charts(rows: &[Row], dir: &Path, stem: &str) -> Result<Vec<PathBuf>> {
+    let shown = rows.iter().map(|r| r.scores.object_psnr).filter(|v| v.is_finite() && *v < PSNR_CAP);
+    let (lo, hi) = shown.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    let y_range = (lo < hi).then(|| (lo - 0.05 * (hi - lo), hi + 0.05 * (hi - lo)));
+    let mut written = Vec::new();
+    for sweep in sweeps(rows) {
+        let (title, x_label, scale) = sweep_axis(sweep);
+        let here: Vec<&Row> = rows.iter().filter(|r| r.sweep == sweep).collect();
+        let mut categories: Vec<String> = Vec::new();
+        for r in &here {
+            if !categories.contains(&r.label) {
+                categories.push(r.label.clone());
+            }
+        }
+        let x = |r: &Row| match scale {
+            Some(s) => r.level * s,
+            None => categories.iter().position(|c| *c == r.label).unwrap_or(0) as f64,
+        };
+        let line = |method: &str| here.iter().filter(|r| r.method == method).map(|r| (x(r), r.scores.object_psnr)).collect::<Vec<_>>();
+        // In these two sweeps the grid is not corrupted: the reference renderer draws the
+        // truth itself.
+        let reference = if matches!(sweep, "two-objects" | "view") { "reference renderer (draws the truth itself here)" } else { "reference renderer on the corrupted grid" };
+        let series = [("RenderNet", line("rendernet")), (reference, line("reference"))];
+        let options = Options {
+            x_categories: if scale.is_none() { categories.iter().map(|c| c.replace("^3", "³")).collect() } else { Vec::new() },
+            cap: Some(Cap { at: PSNR_CAP, note: format!("identical to the clean image (PSNR capped at {PSNR_CAP:.0} dB)") }),
+            markers: true,
+            y_range,
+            ..Options::default()
+        };
+        let path = dir.join(format!("{stem}-{sweep}.png"));
+        let full_title = format!("{title}: object PSNR against the clean scene's reference image");
+        chart::line_chart(&path, &full_title, x_label, "object PSNR (dB)", &series, &options)?;
+        written.push(path);
+    }
+    Ok(written)
 }
 
 /// Per sweep two rows (RenderNet, then the reference renderer on the same corrupted grid),
 /// one column per level.
 fn contact_sheet(rows: &[Row], size: usize) -> image::RgbImage {
-    let mut sweeps: Vec<&str> = Vec::new();
-    for r in rows {
-        if !sweeps.contains(&r.sweep) {
-            sweeps.push(r.sweep);
-        }
-    }
+    let sweeps = sweeps(rows);
     let cols = sweeps.iter().map(|s| rows.iter().filter(|r| r.sweep == *s).count() / 2).max().unwrap_or(1);
     let mut sheet = image::RgbImage::new((cols * size) as u32, (2 * sweeps.len() * size) as u32);
     for (si, s) in sweeps.iter().enumerate() {

@@ -15,7 +15,7 @@ use super::{
 use crate::error::{Error, Result};
 use crate::gpu::{Gpu, Tensor};
 use crate::reference::{GpuGrid, Light, Options, Renderer, Shader, View};
-use crate::voxel::shapes::Rng;
+use crate::rng::SplitMix64;
 use crate::voxel::{Family, Mesh, VoxelGrid, VoxelizeOptions, voxelize};
 use safetensors::{Dtype, tensor::TensorView};
 use std::path::{Path, PathBuf};
@@ -60,7 +60,7 @@ impl Shapes {
     }
 }
 
-/// Everything that determines a dataset's bytes (plus whether to draw a progress bar).
+/// Everything that determines a dataset's bytes.
 #[derive(Clone, Debug)]
 pub struct GenerateOptions {
     /// Shape source.
@@ -89,8 +89,6 @@ pub struct GenerateOptions {
     pub supersample: u32,
     /// Directory of meshes for [`Shapes::Real`].
     pub real_dir: PathBuf,
-    /// Draw an indicatif progress bar on stderr.
-    pub progress: bool,
 }
 
 /// What [`generate`] wrote.
@@ -107,7 +105,7 @@ pub const PAPER_RADII: (f64, f64) = (3.0, 6.3);
 
 /// Seed of shape `i`.
 pub fn shape_seed(seed: u64, i: usize) -> u64 {
-    Rng::new(seed ^ SHAPE_STREAM, i as u64).next_u64()
+    SplitMix64::new(seed ^ SHAPE_STREAM, i as u64).next_u64()
 }
 
 /// The `views` random `(view, light)` pairs of the shape with seed `shape_seed`, as stored:
@@ -115,7 +113,7 @@ pub fn shape_seed(seed: u64, i: usize) -> u64 {
 /// The radius is drawn from `radius` (one draw whatever the range, so a fixed radius leaves
 /// every other value as the paper's range would have drawn it).
 pub fn sample_poses(shape_seed: u64, views: usize, radius: (f64, f64)) -> Vec<([f32; 3], [f32; 5])> {
-    let mut rng = Rng::new(shape_seed, VIEW_STREAM);
+    let mut rng = SplitMix64::new(shape_seed, VIEW_STREAM);
     (0..views)
         .map(|_| {
             let v = [
@@ -226,6 +224,8 @@ struct Writer<'a> {
     dir: &'a Path,
     outputs: Vec<(&'static str, Shader, usize)>,
     buf: ShardBuf,
+    /// Samples rendered so far, for the progress callback.
+    done: usize,
 }
 
 impl Writer<'_> {
@@ -276,7 +276,7 @@ impl Writer<'_> {
         i: usize,
         split: Split,
         info: &mut SplitInfo,
-        bar: &indicatif::ProgressBar,
+        progress: &mut dyn FnMut(usize, usize),
     ) -> Result<()> {
         let (o, gpu) = (self.o, self.gpu);
         let (input, truth) = shape_grids(o, &self.meshes, i)?;
@@ -333,7 +333,8 @@ impl Writer<'_> {
                     let data = t.to_vec(gpu)?;
                     img.extend(data[..c * o.image * o.image].iter().map(|&x| to_u8(x)));
                 }
-                bar.inc(1);
+                self.done += 1;
+                progress(self.done, o.count * o.views);
                 if self.buf.len == SHARD_SIZE {
                     self.flush(split, info)?;
                 }
@@ -376,8 +377,9 @@ fn validate(o: &GenerateOptions) -> Result<()> {
 
 /// Generates the dataset `o` describes into `dir` (created if needed): shards first, each
 /// written atomically, then `manifest.json`. Stale shards and manifest from an earlier run in
-/// the same directory are removed first, so the directory always describes one run.
-pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path) -> Result<Summary> {
+/// the same directory are removed first, so the directory always describes one run. Calls
+/// `progress(done, total)` after every sample.
+pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path, mut progress: impl FnMut(usize, usize)) -> Result<Summary> {
     let t0 = Instant::now();
     validate(o)?;
     let meshes = if o.shapes == Shapes::Real {
@@ -415,17 +417,6 @@ pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path) -> Result<Summary> {
         supersample: o.supersample,
         ..Options::default()
     });
-    let bar = if o.progress {
-        indicatif::ProgressBar::new((o.count * o.views) as u64)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{elapsed_precise} {wide_bar} {pos}/{len} samples {per_sec} eta {eta}",
-        )
-        .expect("valid template"),
-    );
     let mut w = Writer {
         gpu,
         renderer,
@@ -434,6 +425,7 @@ pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path) -> Result<Summary> {
         dir,
         outputs: image_outputs(o.shader),
         buf: ShardBuf::default(),
+        done: 0,
     };
     let (mut train, mut test) = (SplitInfo::default(), SplitInfo::default());
     for (split, range, info) in [
@@ -441,12 +433,11 @@ pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path) -> Result<Summary> {
         (Split::Test, n_train..o.count, &mut test),
     ] {
         for i in range.clone() {
-            w.shape(i, split, info, &bar)?;
+            w.shape(i, split, info, &mut progress)?;
         }
         w.flush(split, info)?;
         info.count = range.len() * o.views;
     }
-    bar.finish();
     let manifest = Manifest {
         shapes: o.shapes.name().to_string(),
         shader: o.shader.name().to_string(),

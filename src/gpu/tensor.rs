@@ -100,22 +100,6 @@ impl Tensor {
         read_staging(gpu, &staging)
     }
 
-    /// The same buffer seen with another shape of equal element count (a free reshape:
-    /// the projection unit folds depth into channels this way).
-    pub fn reshape(&self, shape: &[usize]) -> Result<Tensor> {
-        let n: usize = shape.iter().product();
-        if n != self.numel() {
-            return Err(Error::Invalid(format!(
-                "cannot reshape tensor {:?} ({} values) to {:?} ({} values)",
-                self.shape,
-                self.numel(),
-                shape,
-                n
-            )));
-        }
-        Ok(Tensor { buffer: self.buffer.clone(), shape: shape.to_vec() })
-    }
-
     /// The dimensions.
     pub fn shape(&self) -> &[usize] {
         &self.shape

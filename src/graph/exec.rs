@@ -12,7 +12,7 @@ use super::op::Ctx;
 use super::{Graph, Kind, Value};
 use crate::error::{Error, Result};
 use crate::gpu::{BufferPool, Gpu, Tensor};
-use crate::ops;
+use crate::{ops, rng};
 
 /// What one run recorded and allocated.
 #[derive(Clone, Copy, Debug, Default)]
@@ -22,8 +22,9 @@ pub struct StepStats {
     /// Queue submits with their waits during the step, counted by the device (1 for a whole
     /// training step: the NaN guard is read back from that submit).
     pub submits: u64,
-    /// Bytes the memory planner's pool has allocated: its peak.
-    pub peak_bytes: u64,
+    /// Bytes the memory planner's pool has ever allocated (it keeps what it allocates, so
+    /// this is also its peak).
+    pub pool_bytes: u64,
     /// Bytes all forward values and gradients would take without reuse.
     pub tensor_bytes: u64,
 }
@@ -250,7 +251,7 @@ impl Executor {
             self.check_guard(gpu)?;
             self.step += 1;
         }
-        Ok(StepStats { dispatches: gpu.dispatch_count() - d0, submits: gpu.submit_count() - s0, peak_bytes: self.pool.allocated_bytes(), tensor_bytes })
+        Ok(StepStats { dispatches: gpu.dispatch_count() - d0, submits: gpu.submit_count() - s0, pool_bytes: self.pool.allocated_bytes(), tensor_bytes })
     }
 
     /// Reads the guard flags copied out in the step's own submit; on NaN/Inf names the first
@@ -430,8 +431,10 @@ impl Executor {
         if !self.training {
             return 0;
         }
-        let mut z = self.seed ^ self.step.wrapping_mul(0x9E3779B97F4A7C15) ^ (k as u64).wrapping_mul(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 31)).wrapping_mul(0x94D049BB133111EB);
+        // A one-shot hash on SplitMix64's constants, not its sequence: changing it would
+        // change the masks of runs resumed from existing checkpoints.
+        let mut z = self.seed ^ self.step.wrapping_mul(rng::GAMMA) ^ (k as u64).wrapping_mul(rng::MIX1);
+        z = (z ^ (z >> 31)).wrapping_mul(rng::MIX2);
         (z ^ (z >> 29)) as u32
     }
 }

@@ -9,7 +9,6 @@ mod exec;
 mod op;
 pub mod params;
 pub mod resize_conv;
-pub mod schedule;
 
 pub use exec::{Executor, StepStats};
 pub use op::Op;

@@ -17,7 +17,10 @@
 
 use crate::error::{Result, shape_err};
 use crate::gpu::{Gpu, Tensor};
-use crate::ops::{self, conv::Conv, conv_transpose::ConvTranspose, dropout::Dropout, loss::Loss, phong::Phong};
+use crate::ops::{self, conv::Conv, conv::ConvKernel, conv_transpose::ConvTranspose, dropout::Dropout, loss::Loss, phong::Phong};
+
+/// Graphs run the conv kernels the device is calibrated for.
+const AUTO: ConvKernel = ConvKernel::Auto;
 
 /// An op in a graph, with its configuration.
 #[derive(Clone, Debug)]
@@ -183,9 +186,9 @@ impl Op {
             Op::Prelu => ops::prelu::forward(g, p, x[0], x[1], y),
             Op::Dropout(_) => self.dropout(c.training).forward(g, p, c.seed, x[0], y),
             Op::Add => ops::add::forward(g, p, x[0], x[1], y),
-            Op::Projection => ops::projection::forward(g, p, x[0], x[1], x[2], y),
-            Op::Conv(cv) => cv.forward(g, p, x[0], x[1], Some(x[2]), y),
-            Op::ConvTranspose(cv) => cv.forward(g, p, x[0], x[1], Some(x[2]), y),
+            Op::Projection => ops::projection::forward(AUTO, g, p, x[0], x[1], x[2], y),
+            Op::Conv(cv) => cv.forward(AUTO, g, p, x[0], x[1], Some(x[2]), y),
+            Op::ConvTranspose(cv) => cv.forward(AUTO, g, p, x[0], x[1], Some(x[2]), y),
             Op::Resample(_) => ops::resample::forward(g, p, x[0], x[1], y),
             Op::Phong(ph) => ph.forward(g, p, &phong_inputs(x), y),
             Op::Loss(l) => l.forward(g, p, x[0], x[1], y),
@@ -214,18 +217,18 @@ impl Op {
             Op::Dropout(_) => some(dx[0], |d| self.dropout(c.training).backward(g, p, c.seed, dy, d)),
             Op::Add => unreachable!("the executor passes add's gradient through without a kernel"),
             Op::Projection => {
-                some(dx[0], |d| ops::projection::backward_input(g, p, dy, x[1], d))?;
-                some(dx[1], |d| ops::projection::backward_weight(g, p, x[0], dy, d))?;
+                some(dx[0], |d| ops::projection::backward_input(AUTO, g, p, dy, x[1], d))?;
+                some(dx[1], |d| ops::projection::backward_weight(AUTO, g, p, x[0], dy, d))?;
                 some(dx[2], |d| ops::projection::backward_bias(g, p, dy, d))
             }
             Op::Conv(cv) => {
-                some(dx[0], |d| cv.backward_input(g, p, dy, x[1], d))?;
-                some(dx[1], |d| cv.backward_weight(g, p, x[0], dy, d))?;
+                some(dx[0], |d| cv.backward_input(AUTO, g, p, dy, x[1], d))?;
+                some(dx[1], |d| cv.backward_weight(AUTO, g, p, x[0], dy, d))?;
                 some(dx[2], |d| ops::conv::backward_bias(g, p, dy, d))
             }
             Op::ConvTranspose(cv) => {
-                some(dx[0], |d| cv.backward_input(g, p, dy, x[1], d))?;
-                some(dx[1], |d| cv.backward_weight(g, p, x[0], dy, d))?;
+                some(dx[0], |d| cv.backward_input(AUTO, g, p, dy, x[1], d))?;
+                some(dx[1], |d| cv.backward_weight(AUTO, g, p, x[0], dy, d))?;
                 some(dx[2], |d| cv.backward_bias(g, p, dy, d))
             }
             Op::Resample(_) => {

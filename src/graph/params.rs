@@ -7,6 +7,7 @@
 use super::exec::Executor;
 use crate::error::{Error, Result};
 use crate::gpu::{Gpu, Tensor};
+use crate::rng::SplitMix64;
 use safetensors::{Dtype, SafeTensors, tensor::TensorView};
 use std::collections::{BTreeMap, HashMap};
 use std::io::Write;
@@ -45,17 +46,8 @@ impl Init {
             Init::Xavier | Init::XavierUpsample => (6.0 / (fan_in + fan_out) as f64).sqrt(),
             Init::He => (6.0 / fan_in as f64).sqrt(),
         };
-        let mut state = seed ^ salt.wrapping_mul(0xD1B54A32D192ED03);
-        (0..n)
-            .map(|_| {
-                state = state.wrapping_add(0x9E3779B97F4A7C15);
-                let mut z = state;
-                z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-                z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-                let u = ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64;
-                ((2.0 * u - 1.0) * limit) as f32
-            })
-            .collect()
+        let mut rng = SplitMix64::keyed(seed, salt);
+        (0..n).map(|_| ((2.0 * rng.next_f64() - 1.0) * limit) as f32).collect()
     }
 }
 

@@ -11,10 +11,11 @@ use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
 
 const SHADER: Shader = Shader { name: "conv", source: include_str!("../../shaders/conv.wgsl") };
 
-/// Which kernels a conv call runs. `Auto` (what [`Conv::forward`] and friends use) runs the
-/// tiled kernels, reading textures or buffers by a per-device calibration (cached on disk;
-/// `RENDERNET_CONV_OPERANDS=buffers|textures` overrides it); the others force a choice so
-/// tests and `rendernet bench` can compare them on the same call.
+/// Which kernels a conv, transposed-conv or projection call runs. Pass `Auto` (the
+/// `Default`, what the graph executor uses): the tiled kernels, reading textures or buffers
+/// by a per-device calibration (cached on disk; `RENDERNET_CONV_OPERANDS=buffers|textures`
+/// overrides it). The others force a choice so tests and `rendernet bench` can compare them
+/// on the same call.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum ConvKernel {
     /// The tiled kernels, textures or buffers by the device's calibration.
@@ -22,8 +23,8 @@ pub enum ConvKernel {
     Auto,
     /// The reference kernels: one invocation per output value.
     Reference,
-    /// The tiled kernels reading storage buffers.
-    Fast,
+    /// The tiled kernels reading storage buffers (`rendernet bench --kernel fast`).
+    Buffers,
     /// The tiled kernels reading textures, sharing loads across a subgroup. Falls back to
     /// the buffer kernels where the device lacks subgroups of 8 or the textures would exceed
     /// its limits.
@@ -110,7 +111,8 @@ impl Geometry {
     pub fn y_shape(&self) -> Vec<usize> {
         self.shape(self.n, self.co, self.output)
     }
-    fn params(&self, has_bias: bool, total: usize) -> Params {
+    /// The parameter block with this geometry filled in, everything else zero.
+    pub(crate) fn params(&self) -> Params {
         let u = |v: usize| v as u32;
         let [id, ih, iw] = self.input.map(u);
         let [od, oh, ow] = self.output.map(u);
@@ -122,36 +124,49 @@ impl Geometry {
             ci: u(self.ci),
             co: u(self.co),
             id, ih, iw, od, oh, ow, kd, kh, kw, sd, sh, sw, pd, ph, pw,
-            has_bias: has_bias as u32,
-            total: u(total),
+            ..Default::default()
         }
     }
 }
 
-/// Mirrors `Params` in `shaders/conv.wgsl`; one block for every entry point.
+/// The parameter block of every conv kernel: mirrors `Params` in `shaders/conv_fast.wgsl`,
+/// whose first 20 fields `shaders/conv.wgsl` (the reference kernels) declares as its own.
+/// The shaders document the fields.
 #[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Params {
-    n: u32,
-    ci: u32,
-    co: u32,
-    id: u32,
-    ih: u32,
-    iw: u32,
-    od: u32,
-    oh: u32,
-    ow: u32,
-    kd: u32,
-    kh: u32,
-    kw: u32,
-    sd: u32,
-    sh: u32,
-    sw: u32,
-    pd: u32,
-    ph: u32,
-    pw: u32,
-    has_bias: u32,
-    total: u32,
+#[derive(Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct Params {
+    pub n: u32,
+    pub ci: u32,
+    pub co: u32,
+    pub id: u32,
+    pub ih: u32,
+    pub iw: u32,
+    pub od: u32,
+    pub oh: u32,
+    pub ow: u32,
+    pub kd: u32,
+    pub kh: u32,
+    pub kw: u32,
+    pub sd: u32,
+    pub sh: u32,
+    pub sw: u32,
+    pub pd: u32,
+    pub ph: u32,
+    pub pw: u32,
+    pub has_bias: u32,
+    pub total: u32,
+    // The tiled kernels only, from here on.
+    pub cpad: u32,
+    pub co16: u32,
+    pub flip: u32,
+    pub nchunks: u32,
+    pub chunk: u32,
+    pub fold: u32,
+    pub ycs: u32,
+    pub ysd: u32,
+    pub ysh: u32,
+    pub ysw: u32,
+    pub yoff: u32,
 }
 
 impl Conv {
@@ -174,8 +189,7 @@ impl Conv {
     }
 
     /// Whether `kernel` runs the tiled kernels for `pass` of this conv on input `x_shape`
-    /// and weights `w_shape` (for benchmarks and tests: `Fast` falls back to the reference
-    /// kernels where the tiled ones do not apply).
+    /// and weights `w_shape` (for benchmarks and tests; see `use_fast` for the rule).
     pub fn runs_fast(&self, kernel: ConvKernel, pass: Pass, x_shape: &[usize], w_shape: &[usize]) -> Result<bool> {
         Ok(use_fast(kernel, pass, &self.geometry("conv", x_shape, w_shape)?))
     }
@@ -226,22 +240,10 @@ impl Conv {
         Ok(Geometry { n, ci, co, input, output, kernel: self.kernel, stride: self.stride, pad, rank })
     }
 
-    /// `y = conv(x, w) + b`. `y` must have [`Conv::output_shape`]; `b`, when given, `[Cout]`.
-    pub fn forward(
-        &self,
-        gpu: &Gpu,
-        pass: &mut wgpu::ComputePass<'_>,
-        x: &Tensor,
-        w: &Tensor,
-        b: Option<&Tensor>,
-        y: &Tensor,
-    ) -> Result<()> {
-        self.forward_with(ConvKernel::Auto, gpu, pass, x, w, b, y)
-    }
-
-    /// [`Conv::forward`] with an explicit kernel choice.
+    /// `y = conv(x, w) + b` on `kernel` (see [`ConvKernel`]; `Auto` unless comparing).
+    /// `y` must have [`Conv::output_shape`]; `b`, when given, `[Cout]`.
     #[allow(clippy::too_many_arguments)]
-    pub fn forward_with(
+    pub fn forward(
         &self,
         kernel: ConvKernel,
         gpu: &Gpu,
@@ -258,20 +260,9 @@ impl Conv {
         dispatch_forward(kernel, gpu, pass, &g, x, w, b, y)
     }
 
-    /// `dx = dL/dx` from `dy = dL/dy` (shape of `y`) and the weights; `dx` has `x`'s shape.
+    /// `dx = dL/dx` from `dy = dL/dy` (shape of `y`) and the weights on `kernel`; `dx` has
+    /// `x`'s shape.
     pub fn backward_input(
-        &self,
-        gpu: &Gpu,
-        pass: &mut wgpu::ComputePass<'_>,
-        dy: &Tensor,
-        w: &Tensor,
-        dx: &Tensor,
-    ) -> Result<()> {
-        self.backward_input_with(ConvKernel::Auto, gpu, pass, dy, w, dx)
-    }
-
-    /// [`Conv::backward_input`] with an explicit kernel choice.
-    pub fn backward_input_with(
         &self,
         kernel: ConvKernel,
         gpu: &Gpu,
@@ -286,20 +277,9 @@ impl Conv {
         dispatch_backward_input(kernel, gpu, pass, &g, dy, w, None, dx)
     }
 
-    /// `dw = dL/dw` from the forward input `x` and `dy`; `dw` has the weights' shape.
+    /// `dw = dL/dw` from the forward input `x` and `dy` on `kernel`; `dw` has the weights'
+    /// shape.
     pub fn backward_weight(
-        &self,
-        gpu: &Gpu,
-        pass: &mut wgpu::ComputePass<'_>,
-        x: &Tensor,
-        dy: &Tensor,
-        dw: &Tensor,
-    ) -> Result<()> {
-        self.backward_weight_with(ConvKernel::Auto, gpu, pass, x, dy, dw)
-    }
-
-    /// [`Conv::backward_weight`] with an explicit kernel choice.
-    pub fn backward_weight_with(
         &self,
         kernel: ConvKernel,
         gpu: &Gpu,
@@ -371,7 +351,7 @@ pub fn calibrate(gpu: &Gpu) {
 /// (see `conv_fast::calibrated`).
 fn operands(gpu: &Gpu, kernel: ConvKernel) -> conv_fast::Operands {
     match kernel {
-        ConvKernel::Fast => conv_fast::Operands::Buffers,
+        ConvKernel::Buffers => conv_fast::Operands::Buffers,
         ConvKernel::Texture => conv_fast::Operands::Textures,
         _ => conv_fast::calibrated(gpu),
     }
@@ -392,9 +372,8 @@ pub(crate) fn dispatch_forward(
     if use_fast(kernel, Pass::Forward, g) {
         return conv_fast::forward(gpu, pass, g, x, w, b, y, operands(gpu, kernel));
     }
-    let total = y.numel();
     let args = [Arg::R(x), Arg::R(w), bias_arg(b), Arg::W(y)];
-    gpu.dispatch(pass, SHADER, "conv_forward", &g.params(b.is_some(), total), &args, grid_1d(total as u64, 64)?)
+    reference(gpu, pass, "conv_forward", g, b.is_some(), &args, y.numel())
 }
 
 /// Records the backward-input conv of `g` (shapes checked by the caller): `dx = conv^T(dy,
@@ -413,10 +392,8 @@ pub(crate) fn dispatch_backward_input(
     if use_fast(kernel, Pass::BackwardInput, g) {
         return conv_fast::backward_input(gpu, pass, g, dy, w, b, dx, operands(gpu, kernel));
     }
-    let total = dx.numel();
     let args = [Arg::R(dy), Arg::R(w), bias_arg(b), Arg::W(dx)];
-    let params = g.params(b.is_some(), total);
-    gpu.dispatch(pass, SHADER, "conv_backward_input", &params, &args, grid_1d(total as u64, 64)?)
+    reference(gpu, pass, "conv_backward_input", g, b.is_some(), &args, dx.numel())
 }
 
 /// Records the backward-weight conv of `g` (shapes checked by the caller).
@@ -433,8 +410,20 @@ pub(crate) fn dispatch_backward_weight(
     if use_fast(kernel, Pass::BackwardWeight, g) {
         return conv_fast::backward_weight(gpu, pass, g, x, dy, dw, operands(gpu, kernel));
     }
-    let total = dw.numel();
     let args = [Arg::R(x), Arg::R(dy), Arg::W(dw)];
-    let params = g.params(false, total);
-    gpu.dispatch(pass, SHADER, "conv_backward_weight", &params, &args, grid_1d(total as u64, 64)?)
+    reference(gpu, pass, "conv_backward_weight", g, false, &args, dw.numel())
+}
+
+/// Records reference kernel `entry` of `g`: one invocation per value of the `total` it writes.
+fn reference(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    entry: &'static str,
+    g: &Geometry,
+    has_bias: bool,
+    args: &[Arg],
+    total: usize,
+) -> Result<()> {
+    let params = Params { has_bias: has_bias as u32, total: total as u32, ..g.params() };
+    gpu.dispatch(pass, SHADER, entry, &params, args, grid_1d(total as u64, 64)?)
 }

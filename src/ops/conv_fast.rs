@@ -3,7 +3,7 @@
 //! storage buffers, or textures shared across a subgroup. Each call repacks its operands
 //! (channels-last buffers or rgba32f textures) first, so callers keep PyTorch layouts.
 
-use super::conv::Geometry;
+use super::conv::{Geometry, Params};
 use crate::error::Result;
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
 
@@ -14,64 +14,19 @@ const TEX_SHADER: Shader = Shader {
     source: concat!(include_str!("../../shaders/conv_fast.wgsl"), include_str!("../../shaders/conv_tex.wgsl")),
 };
 
-/// Mirrors `Params` in `shaders/conv_fast.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
-struct Params {
-    n: u32,
-    ci: u32,
-    co: u32,
-    id: u32,
-    ih: u32,
-    iw: u32,
-    od: u32,
-    oh: u32,
-    ow: u32,
-    kd: u32,
-    kh: u32,
-    kw: u32,
-    sd: u32,
-    sh: u32,
-    sw: u32,
-    pd: u32,
-    ph: u32,
-    pw: u32,
-    cpad: u32,
-    co16: u32,
-    flip: u32,
-    has_bias: u32,
-    nchunks: u32,
-    chunk: u32,
-    total: u32,
-    fold: u32,
-    ycs: u32,
-    ysd: u32,
-    ysh: u32,
-    ysw: u32,
-    yoff: u32,
-}
-
+/// The tiled kernels' parameters for dispatch geometry `g` with `cpad` packed channels.
 fn params(g: &Geometry, cpad: usize) -> Params {
-    let u = |v: usize| v as u32;
-    let [id, ih, iw] = g.input.map(u);
-    let [od, oh, ow] = g.output.map(u);
-    let [kd, kh, kw] = g.kernel.map(u);
-    let [sd, sh, sw] = g.stride.map(u);
-    let [pd, ph, pw] = g.pad.map(u);
+    let p = g.params();
     Params {
-        n: u(g.n),
-        ci: u(g.ci),
-        co: u(g.co),
-        id, ih, iw, od, oh, ow, kd, kh, kw, sd, sh, sw, pd, ph, pw,
-        cpad: u(cpad),
-        co16: u(g.co.div_ceil(16)),
+        cpad: cpad as u32,
+        co16: g.co.div_ceil(16) as u32,
         fold: 1,
         // Dense output layout.
-        ycs: od * oh * ow,
-        ysd: oh * ow,
-        ysh: ow,
+        ycs: p.od * p.oh * p.ow,
+        ysd: p.oh * p.ow,
+        ysh: p.ow,
         ysw: 1,
-        ..Default::default()
+        ..p
     }
 }
 
@@ -352,7 +307,7 @@ pub(crate) fn forward(
 /// One output phase `r` of a backward-input conv along one axis (see the shader header):
 /// dx positions `r + s*m` for `m < len` read dy through the sub-kernel of `taps` taps from
 /// `k0` (step s; at least one tap, weights zero past the kernel) at padding `pad`.
-struct Phase {
+struct StridePhase {
     len: usize,
     k0: usize,
     taps: usize,
@@ -360,11 +315,11 @@ struct Phase {
 }
 
 /// Phase `r` on an axis with dx length `input`, kernel `k`, stride `s`, padding before `pad`.
-fn phase(r: usize, input: usize, k: usize, s: usize, pad: usize) -> Phase {
+fn stride_phase(r: usize, input: usize, k: usize, s: usize, pad: usize) -> StridePhase {
     let k0 = (r + pad) % s;
     let taps = k.saturating_sub(k0).div_ceil(s).max(1);
     let len = input.saturating_sub(r).div_ceil(s);
-    Phase { len, k0, taps, pad: taps as i64 - 1 - ((r + pad) / s) as i64 }
+    StridePhase { len, k0, taps, pad: taps as i64 - 1 - ((r + pad) / s) as i64 }
 }
 
 /// Tiled `dx = conv^T(dy, w) (+ b)`: per output phase (one at stride 1), a stride-1 forward
@@ -391,7 +346,7 @@ pub(crate) fn backward_input(
     let [sd, sh, sw] = g.stride;
     for i in 0..volume(g.stride) {
         let r = [i / (sh * sw), (i / sw) % sh, i % sw];
-        let ph = [0, 1, 2].map(|a| phase(r[a], g.input[a], g.kernel[a], g.stride[a], g.pad[a]));
+        let ph = [0, 1, 2].map(|a| stride_phase(r[a], g.input[a], g.kernel[a], g.stride[a], g.pad[a]));
         if ph.iter().any(|q| q.len == 0) {
             continue;
         }

@@ -113,22 +113,10 @@ impl ConvTranspose {
         Ok(g)
     }
 
-    /// `y = conv_transpose(x, w) + b`; `b`, when given, is `[Cout]`.
-    pub fn forward(
-        &self,
-        gpu: &Gpu,
-        pass: &mut wgpu::ComputePass<'_>,
-        x: &Tensor,
-        w: &Tensor,
-        b: Option<&Tensor>,
-        y: &Tensor,
-    ) -> Result<()> {
-        self.forward_with(ConvKernel::Auto, gpu, pass, x, w, b, y)
-    }
-
-    /// [`ConvTranspose::forward`] with an explicit kernel choice.
+    /// `y = conv_transpose(x, w) + b` on `kernel` (see [`ConvKernel`]; `Auto` unless
+    /// comparing); `b`, when given, is `[Cout]`.
     #[allow(clippy::too_many_arguments)]
-    pub fn forward_with(
+    pub fn forward(
         &self,
         kernel: ConvKernel,
         gpu: &Gpu,
@@ -144,21 +132,9 @@ impl ConvTranspose {
         conv::dispatch_backward_input(kernel, gpu, pass, &g, x, w, b, y)
     }
 
-    /// `dx = dL/dx` from `dy = dL/dy` and the weights: the equivalent forward conv of `dy`.
+    /// `dx = dL/dx` from `dy = dL/dy` and the weights on `kernel`: the equivalent forward
+    /// conv of `dy`.
     pub fn backward_input(
-        &self,
-        gpu: &Gpu,
-        pass: &mut wgpu::ComputePass<'_>,
-        dy: &Tensor,
-        w: &Tensor,
-        dx: &Tensor,
-    ) -> Result<()> {
-        self.backward_input_with(ConvKernel::Auto, gpu, pass, dy, w, dx)
-    }
-
-    /// [`ConvTranspose::backward_input`] with an explicit kernel choice.
-    #[allow(clippy::too_many_arguments)]
-    pub fn backward_input_with(
         &self,
         kernel: ConvKernel,
         gpu: &Gpu,
@@ -172,21 +148,9 @@ impl ConvTranspose {
         conv::dispatch_forward(kernel, gpu, pass, &g, dy, w, None, dx)
     }
 
-    /// `dw = dL/dw` from the forward input `x` and `dy`; `dw` is `[Cin, Cout, k...]`.
+    /// `dw = dL/dw` from the forward input `x` and `dy` on `kernel`; `dw` is
+    /// `[Cin, Cout, k...]`.
     pub fn backward_weight(
-        &self,
-        gpu: &Gpu,
-        pass: &mut wgpu::ComputePass<'_>,
-        x: &Tensor,
-        dy: &Tensor,
-        dw: &Tensor,
-    ) -> Result<()> {
-        self.backward_weight_with(ConvKernel::Auto, gpu, pass, x, dy, dw)
-    }
-
-    /// [`ConvTranspose::backward_weight`] with an explicit kernel choice.
-    #[allow(clippy::too_many_arguments)]
-    pub fn backward_weight_with(
         &self,
         kernel: ConvKernel,
         gpu: &Gpu,

@@ -1,4 +1,5 @@
-//! ELU, the shape autoencoder's activation (binds `shaders/elu.wgsl`).
+//! ELU (binds `shaders/elu.wgsl`), the graph op `Op::Elu`; no network of this crate uses it
+//! yet.
 
 use super::elementwise;
 use crate::error::Result;

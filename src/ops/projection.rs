@@ -71,13 +71,9 @@ impl ProjectionDims {
     }
 }
 
-/// `y[n,o] = Σ_k w[o,k] x[n,k] + b[o]` per pixel.
-pub fn forward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, w: &Tensor, b: &Tensor, y: &Tensor) -> Result<()> {
-    forward_with(ConvKernel::Auto, gpu, pass, x, w, b, y)
-}
-
-/// [`forward`] with an explicit kernel choice (`Reference` is `projection.wgsl`).
-pub fn forward_with(
+/// `y[n,o] = Σ_k w[o,k] x[n,k] + b[o]` per pixel, on `kernel` (see [`ConvKernel`]; `Auto`
+/// unless comparing; `Reference` is `projection.wgsl`).
+pub fn forward(
     kernel: ConvKernel,
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
@@ -97,13 +93,8 @@ pub fn forward_with(
     gpu.dispatch(pass, SHADER, "projection_forward", &d.params(), &args, grid_1d(y.numel() as u64, 64)?)
 }
 
-/// `dx = wᵀ dy` (shape of `x`).
-pub fn backward_input(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, dy: &Tensor, w: &Tensor, dx: &Tensor) -> Result<()> {
-    backward_input_with(ConvKernel::Auto, gpu, pass, dy, w, dx)
-}
-
-/// [`backward_input`] with an explicit kernel choice.
-pub fn backward_input_with(
+/// `dx = wᵀ dy` (shape of `x`) on `kernel`.
+pub fn backward_input(
     kernel: ConvKernel,
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
@@ -121,13 +112,8 @@ pub fn backward_input_with(
     gpu.dispatch(pass, SHADER, "projection_backward_input", &d.params(), &args, grid_1d(dx.numel() as u64, 64)?)
 }
 
-/// `dw = Σ_n dy xᵀ` (shape `[O, K, 1, 1]`).
-pub fn backward_weight(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, dy: &Tensor, dw: &Tensor) -> Result<()> {
-    backward_weight_with(ConvKernel::Auto, gpu, pass, x, dy, dw)
-}
-
-/// [`backward_weight`] with an explicit kernel choice.
-pub fn backward_weight_with(
+/// `dw = Σ_n dy xᵀ` (shape `[O, K, 1, 1]`) on `kernel`.
+pub fn backward_weight(
     kernel: ConvKernel,
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,

@@ -3,16 +3,18 @@
 
 pub mod batch;
 pub mod eval;
+pub mod lr;
 pub mod plot;
 
 use crate::data::{Dataset, Split};
 use crate::error::{Error, Result};
 use crate::graph::Executor;
-use crate::graph::schedule::exponential_decay;
 use crate::nn::rendernet::{Head, Preset, RenderNet, phong_of};
 use crate::ops::adam::Adam;
+use crate::rng::SplitMix64;
 use crate::gpu::Gpu;
 use batch::Batch;
+use lr::exponential_decay;
 use std::path::PathBuf;
 
 /// How to train.
@@ -62,14 +64,6 @@ pub fn window_at(p: &Preset, step: u64, steps: u64) -> usize {
     (p.cam >> (3 - phase)).max(4)
 }
 
-fn rng_next(state: &mut u64) -> u64 {
-    *state = state.wrapping_add(0x9E3779B97F4A7C15);
-    let mut z = *state;
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-    z ^ (z >> 31)
-}
-
 /// The head a dataset's shader needs.
 pub fn head_for(ds: &Dataset) -> Result<Head> {
     let shader = ds.manifest.shader_kind()?;
@@ -82,19 +76,20 @@ pub fn head_for(ds: &Dataset) -> Result<Head> {
     })
 }
 
-struct Phase {
+/// One phase of the crop schedule: the training graph built for its window, and its executor.
+struct CropPhase {
     window: usize,
     net: RenderNet,
     ex: Executor,
 }
 
-fn phase(gpu: &Gpu, cfg: &TrainConfig, head: Head, window: usize, from: Option<&std::path::Path>) -> Result<Phase> {
+fn crop_phase(gpu: &Gpu, cfg: &TrainConfig, head: Head, window: usize, from: Option<&std::path::Path>) -> Result<CropPhase> {
     let net = RenderNet::build(&cfg.preset, head, cfg.batch, [window, window], true)?;
     let mut ex = Executor::new(gpu, net.graph.clone(), cfg.seed)?;
     if let Some(ckpt) = from {
         ex.load_checkpoint(gpu, ckpt)?;
     }
-    Ok(Phase { window, net, ex })
+    Ok(CropPhase { window, net, ex })
 }
 
 /// Trains as configured, calling `report` after every step and evaluation. Returns the
@@ -120,9 +115,9 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
             return Err(Error::Invalid(format!("--crop {w}: must be a multiple of 4 in 4..={}", p.cam)));
         }
     }
-    let mut cur = phase(gpu, cfg, head, window(start), resume)?;
+    let mut cur = crop_phase(gpu, cfg, head, window(start), resume)?;
     let names: Vec<String> = cur.net.targets.iter().map(|(n, _)| n.clone()).collect();
-    let mut rng = cfg.seed ^ 0x5EED ^ start.wrapping_mul(0x2545F4914F6CDD1D);
+    let mut rng = SplitMix64(cfg.seed ^ 0x5EED ^ start.wrapping_mul(0x2545F4914F6CDD1D));
     // The curve lives in <out>.log.csv (step,loss,psnr), appended every evaluation and read
     // back on resume, so the PNG covers the whole run across interruptions.
     let log = cfg.out.with_extension("log.csv");
@@ -133,13 +128,13 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
         let w = window(step);
         if w != cur.window {
             cur.ex.save_checkpoint(gpu, &cfg.out)?;
-            cur = phase(gpu, cfg, head, w, Some(&cfg.out))?;
+            cur = crop_phase(gpu, cfg, head, w, Some(&cfg.out))?;
         }
         let mut b = Batch::default();
         for _ in 0..cfg.batch {
-            let i = (rng_next(&mut rng) % train.len() as u64) as usize;
+            let i = (rng.next_u64() % train.len() as u64) as usize;
             let sample = train.get(i)?;
-            let r = [rng_next(&mut rng), rng_next(&mut rng), rng_next(&mut rng)];
+            let r = [rng.next_u64(), rng.next_u64(), rng.next_u64()];
             let (h0, w0) = batch::window_origin(p, &sample, w, r);
             b.push(p, &sample, [h0, w0, w, w], &names)?;
         }
@@ -174,7 +169,7 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
 /// Projects the transposed convs' weights (`up.*.weight`) back onto resize-convolutions
 /// after an optimiser step (see `graph::resize_conv`): they stay "nearest upsample + 3x3
 /// conv", which cannot grow a checkerboard, at the transposed conv's cost.
-fn keep_resize_convs(gpu: &Gpu, ph: &Phase) -> Result<()> {
+fn keep_resize_convs(gpu: &Gpu, ph: &CropPhase) -> Result<()> {
     let g = ph.ex.graph();
     for v in g.params() {
         let info = g.info(v);
@@ -187,7 +182,7 @@ fn keep_resize_convs(gpu: &Gpu, ph: &Phase) -> Result<()> {
     Ok(())
 }
 
-fn feed(gpu: &Gpu, ph: &Phase, b: &Batch) -> Result<()> {
+fn feed(gpu: &Gpu, ph: &CropPhase, b: &Batch) -> Result<()> {
     let (ex, net) = (&ph.ex, &ph.net);
     ex.feed(gpu, net.grid, &b.grid)?;
     ex.feed(gpu, net.pose, &b.pose)?;

@@ -14,49 +14,6 @@ pub use families::{chair, primitive, sofa, table};
 use super::{Mesh, VoxelError, VoxelGrid, check_dims};
 use glam::{Mat3, Vec3};
 
-/// SplitMix64 (Steele, Lea & Flood 2014): tiny, fast, statistically fine for shape parameters
-/// and stable across platforms and crate versions, which `rand` would not promise.
-#[derive(Clone, Debug)]
-pub struct Rng(u64);
-
-impl Rng {
-    /// A generator for `seed`; `stream` separates families so `chair(1)` and `table(1)` are
-    /// unrelated.
-    pub fn new(seed: u64, stream: u64) -> Self {
-        let mut r = Rng(seed ^ stream.wrapping_mul(0xD1B5_4A32_D192_ED03));
-        r.next_u64(); // decorrelates nearby seeds
-        r
-    }
-
-    /// Next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[0, 1)`.
-    pub fn unit(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-    }
-
-    /// Uniform in `[lo, hi)`.
-    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.unit()
-    }
-
-    /// True with probability `p`.
-    pub fn chance(&mut self, p: f32) -> bool {
-        self.unit() < p
-    }
-
-    /// Uniform integer in `0..n` (`n > 0`).
-    pub fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-}
 
 /// An analytic solid.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,7 +1,8 @@
 //! The family generators. Dimensions are in metres (y up, front +z) so the ranges read like
 //! furniture catalogue numbers; [`Shape::new`] normalises afterwards.
 
-use super::{Family, Op, Rng, Shape, Solid};
+use super::{Family, Op, Shape, Solid};
+use crate::rng::SplitMix64;
 use glam::{Mat3, Vec2, Vec3};
 
 /// Leg styles shared by chairs and tables.
@@ -22,7 +23,7 @@ fn add(parts: &mut Vec<(Op, Solid)>, s: Solid) {
 }
 
 /// Four legs from `top_y` down to the floor under the given (x, z) corners.
-fn legs(rng: &mut Rng, parts: &mut Vec<(Op, Solid)>, corners: [Vec2; 4], top_y: f32, thick: f32) {
+fn legs(rng: &mut SplitMix64, parts: &mut Vec<(Op, Solid)>, corners: [Vec2; 4], top_y: f32, thick: f32) {
     let style = [
         LegStyle::Square,
         LegStyle::Round,
@@ -81,7 +82,7 @@ fn rect_corners(w: f32, d: f32, inset: f32) -> [Vec2; 4] {
 /// A chair: seat, back (solid panel, vertical or horizontal slats, possibly reclined), four
 /// legs, optional arms and side stretchers.
 pub fn chair(seed: u64) -> Shape {
-    let mut rng = Rng::new(seed, 1);
+    let mut rng = SplitMix64::new(seed, 1);
     let mut p = Vec::new();
     let (w, d) = (rng.range(0.4, 0.6), rng.range(0.38, 0.55));
     let seat_t = rng.range(0.03, 0.08);
@@ -203,7 +204,7 @@ pub fn chair(seed: u64) -> Shape {
 /// A table: rectangular or round top on four legs or a pedestal, with an optional shelf or
 /// apron.
 pub fn table(seed: u64) -> Shape {
-    let mut rng = Rng::new(seed, 2);
+    let mut rng = SplitMix64::new(seed, 2);
     let mut p = Vec::new();
     let height = rng.range(0.65, 0.8);
     let top_t = rng.range(0.025, 0.07);
@@ -288,7 +289,7 @@ pub fn table(seed: u64) -> Shape {
 /// A sofa: base block, one to three seat cushions, back, two arms (square or rolled), and
 /// optional short feet.
 pub fn sofa(seed: u64) -> Shape {
-    let mut rng = Rng::new(seed, 3);
+    let mut rng = SplitMix64::new(seed, 3);
     let mut p = Vec::new();
     let (w, d) = (rng.range(1.4, 2.2), rng.range(0.75, 0.95));
     let foot_h = if rng.chance(0.6) {
@@ -377,7 +378,7 @@ pub fn sofa(seed: u64) -> Shape {
 }
 
 /// A random solid (box, sphere or cylinder) of size about `size` near the origin.
-fn random_solid(rng: &mut Rng, size: f32, spread: f32) -> Solid {
+fn random_solid(rng: &mut SplitMix64, size: f32, spread: f32) -> Solid {
     let center = Vec3::new(
         rng.range(-spread, spread),
         rng.range(-spread, spread),
@@ -417,7 +418,7 @@ fn random_solid(rng: &mut Rng, size: f32, spread: f32) -> Solid {
 
 /// One to three unioned solids with up to two smaller solids carved out of them.
 pub fn primitive(seed: u64) -> Shape {
-    let mut rng = Rng::new(seed, 4);
+    let mut rng = SplitMix64::new(seed, 4);
     let mut p = Vec::new();
     for k in 0..1 + rng.below(3) {
         let spread = if k == 0 { 0.0 } else { 0.5 };

@@ -1,4 +1,4 @@
-//! Learning-rate schedules.
+//! Learning-rate schedules for training.
 
 /// The original code's schedule (TensorFlow's `exponential_decay`): `lr0 * rate^(step /
 /// decay_steps)`, with the exponent floored when `staircase` is set.
