@@ -34,6 +34,9 @@ enum Cmd {
     Train(cli::train::TrainArgs),
     /// Mean held-out PSNR (95% interval) and per-shape PSNR of trained weights.
     Eval(cli::eval::EvalArgs),
+    /// Redraw a training run's curve (loss and held-out PSNR against step) from its
+    /// `<out>.log.csv`.
+    Curve(cli::train::CurveArgs),
     /// Recover the camera pose and the light from one image of a known shape, by gradient
     /// descent through the frozen network (coarse silhouette search, then Adam on the best
     /// starts). Without --image, the target is rendered from the scene flags and the errors
@@ -72,6 +75,7 @@ fn main() -> ExitCode {
         Cmd::Train(a) => cli::train::run(a),
         Cmd::Render(a) => cli::render::run(a),
         Cmd::Eval(a) => cli::eval::run(a),
+        Cmd::Curve(a) => cli::train::run_curve(a),
         Cmd::Bench(a) => cli::bench::run(a),
         Cmd::Invert(a) => cli::invert::run(a),
         Cmd::Stress(a) => cli::stress::run(a),

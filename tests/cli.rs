@@ -355,3 +355,19 @@ fn stress_runs_every_sweep_and_scores_against_the_clean_scene() {
     assert!(err.contains("--charts"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `curve` redraws a run's chart from its log and names the flag when the log is missing.
+#[test]
+fn curve_redraws_a_log_and_rejects_a_missing_one() {
+    let dir = scratch("curve");
+    let log = dir.join("run.log.csv");
+    let rows: String = (1..=50).map(|s| format!("{s},{},\n", 1.0 / s as f32)).collect();
+    std::fs::write(&log, format!("step,loss,psnr\n{rows}50,,21.5\n")).unwrap();
+    let png = dir.join("curve.png");
+    let out = run_ok(&["curve", "--log", log.to_str().unwrap(), "--out", png.to_str().unwrap()]);
+    assert!(out.contains("50 loss rows, 1 evaluations"), "{out}");
+    assert!(image::open(&png).is_ok());
+    let err = run_err(&["curve", "--log", dir.join("none.csv").to_str().unwrap(), "--out", png.to_str().unwrap()], &[]);
+    assert!(err.contains("--log") && err.contains("no such file"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -118,3 +118,29 @@ pub fn run(a: TrainArgs) -> Result<()> {
     println!("final held-out PSNR {psnr:.2} dB; weights in {}", cfg.out.with_extension("weights.safetensors").display());
     Ok(())
 }
+
+/// Flags of `rendernet curve`.
+#[derive(Args)]
+pub struct CurveArgs {
+    /// A training log (`<out>.log.csv`, written by `train` at every evaluation).
+    #[arg(long)]
+    log: PathBuf,
+    /// The PNG to write.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// Redraws a run's curve from its log (the same chart `train` keeps next to the checkpoint).
+pub fn run_curve(a: CurveArgs) -> Result<()> {
+    super::output::check_png_out(&a.out)?;
+    if !a.log.is_file() {
+        return Err(rendernet::Error::Invalid(format!("--log {}: no such file", a.log.display())));
+    }
+    let (loss, psnr) = rendernet::train::plot::read_log(&a.log, u64::MAX);
+    if loss.is_empty() && psnr.is_empty() {
+        return Err(rendernet::Error::Invalid(format!("--log {}: no step,loss,psnr rows", a.log.display())));
+    }
+    rendernet::train::plot::write_curve(&a.out, &loss, &psnr).map_err(|e| rendernet::Error::Invalid(format!("{}: {e}", a.out.display())))?;
+    println!("wrote {} ({} loss rows, {} evaluations)", a.out.display(), loss.len(), psnr.len());
+    Ok(())
+}
