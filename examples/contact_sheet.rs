@@ -3,9 +3,11 @@
 //!
 //! `cargo run --example contact_sheet -- [MESH] [OUT.png]`
 
+mod common;
+
 use clap::Parser;
 use rendernet::Gpu;
-use rendernet::reference::{Light, Renderer, Shader, View, png_path_problem, write_png};
+use rendernet::reference::{Light, Renderer, Shader, View, write_png};
 use rendernet::voxel::{self, Mesh, VoxelizeOptions, shapes};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -16,15 +18,10 @@ struct Args {
     /// Mesh (.obj, .off or .ply); default: a procedural chair.
     mesh: Option<PathBuf>,
     /// Where to write the PNG.
-    #[arg(default_value = "contact-sheet.png", value_parser = png_out)]
+    #[arg(default_value = "contact-sheet.png", value_parser = common::png_out)]
     out: PathBuf,
 }
 
-/// Rejects a non-PNG output name at parse time, before any rendering.
-fn png_out(s: &str) -> Result<PathBuf, String> {
-    let p = PathBuf::from(s);
-    png_path_problem(&p).map_or(Ok(p), Err)
-}
 
 fn run(a: Args) -> Result<(), Box<dyn std::error::Error>> {
     let grid = match &a.mesh {
@@ -46,12 +43,5 @@ fn run(a: Args) -> Result<(), Box<dyn std::error::Error>> {
 }
 
 fn main() -> ExitCode {
-    // Errors print with Display (a sentence), not Debug, and exit non-zero.
-    match run(Args::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
-    }
+    common::exit_with(run(Args::parse()))
 }

@@ -3,9 +3,11 @@
 //!
 //! `cargo run --example dataset_preview -- DIR [train|test] [SAMPLES] [OUT.png]`
 
+mod common;
+
 use clap::{Parser, ValueEnum};
 use rendernet::data::{Dataset, Split};
-use rendernet::reference::{png_path_problem, write_png};
+use rendernet::reference::write_png;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -28,15 +30,10 @@ struct Args {
     #[arg(default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..))]
     samples: u32,
     /// Where to write the PNG.
-    #[arg(default_value = "dataset-preview.png", value_parser = png_out)]
+    #[arg(default_value = "dataset-preview.png", value_parser = common::png_out)]
     out: PathBuf,
 }
 
-/// Rejects a non-PNG output name at parse time, before any rendering.
-fn png_out(s: &str) -> Result<PathBuf, String> {
-    let p = PathBuf::from(s);
-    png_path_problem(&p).map_or(Ok(p), Err)
-}
 
 fn run(a: Args) -> Result<(), Box<dyn std::error::Error>> {
     let ds = Dataset::open(&a.dir)?;
@@ -66,12 +63,5 @@ fn run(a: Args) -> Result<(), Box<dyn std::error::Error>> {
 }
 
 fn main() -> ExitCode {
-    // Errors print with Display (a sentence), not Debug, and exit non-zero.
-    match run(Args::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
-    }
+    common::exit_with(run(Args::parse()))
 }

@@ -3,11 +3,13 @@
 //! `cargo run --example render -- [GRID.binvox|.safetensors] [OUT.png]`
 //! (default: a procedural chair, `render-example.png`).
 
+mod common;
+
 use clap::Parser;
 use rendernet::Gpu;
 use rendernet::nn::render::{Renderer, TINY_PHONG_WEIGHTS};
 use rendernet::nn::rendernet::Preset;
-use rendernet::reference::{Light, View, png_path_problem};
+use rendernet::reference::{Light, View};
 use rendernet::voxel::{Binvox, safetensors_io, shapes};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -18,15 +20,10 @@ struct Args {
     /// Voxel grid (.binvox or .safetensors); default: a procedural chair.
     grid: Option<PathBuf>,
     /// Where to write the PNG.
-    #[arg(default_value = "render-example.png", value_parser = png_out)]
+    #[arg(default_value = "render-example.png", value_parser = common::png_out)]
     out: PathBuf,
 }
 
-/// Rejects a non-PNG output name at parse time, before any rendering.
-fn png_out(s: &str) -> Result<PathBuf, String> {
-    let p = PathBuf::from(s);
-    png_path_problem(&p).map_or(Ok(p), Err)
-}
 
 fn run(a: Args) -> Result<(), Box<dyn std::error::Error>> {
     let grid = match &a.grid {
@@ -44,12 +41,5 @@ fn run(a: Args) -> Result<(), Box<dyn std::error::Error>> {
 }
 
 fn main() -> ExitCode {
-    // Errors print with Display (a sentence), not Debug, and exit non-zero.
-    match run(Args::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
-    }
+    common::exit_with(run(Args::parse()))
 }

@@ -2,11 +2,13 @@
 //!
 //! `cargo run --example turntable -- [FRAMES] [OUT.png]` (default 8 frames of a chair).
 
+mod common;
+
 use clap::Parser;
 use rendernet::Gpu;
 use rendernet::nn::render::{Renderer, TINY_PHONG_WEIGHTS};
 use rendernet::nn::rendernet::Preset;
-use rendernet::reference::{Light, View, png_path_problem, write_png};
+use rendernet::reference::{Light, View, write_png};
 use rendernet::voxel::shapes;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -18,15 +20,10 @@ struct Args {
     #[arg(default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=360))]
     frames: u32,
     /// Where to write the PNG.
-    #[arg(default_value = "turntable.png", value_parser = png_out)]
+    #[arg(default_value = "turntable.png", value_parser = common::png_out)]
     out: PathBuf,
 }
 
-/// Rejects a non-PNG output name at parse time, before any rendering.
-fn png_out(s: &str) -> Result<PathBuf, String> {
-    let p = PathBuf::from(s);
-    png_path_problem(&p).map_or(Ok(p), Err)
-}
 
 fn run(a: Args) -> Result<(), Box<dyn std::error::Error>> {
     let gpu = Gpu::new()?;
@@ -46,12 +43,5 @@ fn run(a: Args) -> Result<(), Box<dyn std::error::Error>> {
 }
 
 fn main() -> ExitCode {
-    // Errors print with Display (a sentence), not Debug, and exit non-zero.
-    match run(Args::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
-    }
+    common::exit_with(run(Args::parse()))
 }

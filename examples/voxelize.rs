@@ -5,6 +5,8 @@
 //!
 //! `cargo run --example voxelize -- MESH N OUT.binvox|OUT.safetensors`
 
+mod common;
+
 use clap::Parser;
 use rendernet::voxel::{Binvox, Mesh, VoxelizeOptions, safetensors_io, voxelize};
 use std::path::PathBuf;
@@ -44,12 +46,5 @@ fn run(a: Args) -> Result<(), Box<dyn std::error::Error>> {
 }
 
 fn main() -> ExitCode {
-    // Errors print with Display (a sentence), not Debug, and exit non-zero.
-    match run(Args::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
-    }
+    common::exit_with(run(Args::parse()))
 }

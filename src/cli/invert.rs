@@ -4,13 +4,12 @@
 use super::truth::{SceneArgs, load};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use rendernet::bench::median;
 use rendernet::data::Dataset;
 use rendernet::invert::{self, InvertOptions, Inverter, angle_between, light_direction, view_direction};
 use rendernet::nn::rendernet::Head;
 use rendernet::train::head_for;
 use rendernet::train::eval::Interval;
-use rendernet::nn::render::TINY_PHONG_WEIGHTS;
-use rendernet::nn::rendernet::Preset;
 use rendernet::reference::{self, Image, Light, Options, Shader};
 use rendernet::{Error, Gpu, Result};
 use std::path::PathBuf;
@@ -28,12 +27,8 @@ pub struct InvertArgs {
     /// and light.
     #[command(flatten)]
     scene: SceneArgs,
-    /// Weights of a Phong RenderNet; default: the embedded tiny Phong weights.
-    #[arg(long)]
-    weights: Option<PathBuf>,
-    /// Network size the weights belong to.
-    #[arg(long, default_value = "tiny")]
-    preset: String,
+    #[command(flatten)]
+    net: super::weights::WeightsArgs,
     /// Azimuth starts of the coarse silhouette search (evenly spaced over 360 degrees).
     #[arg(long, default_value_t = InvertOptions::default().azimuths)]
     azimuths: usize,
@@ -58,14 +53,14 @@ pub struct InvertArgs {
 pub fn run(a: InvertArgs) -> Result<()> {
     let t0 = Instant::now();
     super::output::check_png_out(&a.out)?;
-    let preset = Preset::by_name(&a.preset)?;
+    let preset = a.net.preset()?;
     if a.image.is_none() {
         // The scene flags then describe the true view and light, rendered as the target.
         a.scene.validate(preset.image_for(preset.cam))?;
     }
     let (grid, what) = load(&a.scene)?;
     let gpu = Gpu::new()?;
-    let (bytes, name) = weights(&a.weights)?;
+    let (bytes, name) = a.net.load()?;
     let inv = Inverter::new(preset, &bytes, &name, Light::default());
     let (target, truth) = match &a.image {
         Some(p) => (Image::load_rgb(p)?, None),
@@ -129,12 +124,8 @@ pub struct EvalInvertArgs {
     /// Held-out samples to invert, spread over the split (0 = all).
     #[arg(long, default_value_t = 10)]
     samples: usize,
-    /// Weights of a Phong RenderNet; default: the embedded tiny Phong weights.
-    #[arg(long)]
-    weights: Option<PathBuf>,
-    /// Network size the weights belong to.
-    #[arg(long, default_value = "tiny")]
-    preset: String,
+    #[command(flatten)]
+    net: super::weights::WeightsArgs,
     /// Refinement steps per sample.
     #[arg(long, default_value_t = InvertOptions::default().steps)]
     steps: usize,
@@ -151,8 +142,8 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
         return Err(Error::Invalid(format!("{}: inversion needs a Phong dataset", a.data.display())));
     };
     let light = Light { ambient: ph.ambient, kd: ph.kd, ks: ph.ks, shininess: ph.shininess, ..Light::default() };
-    let (bytes, name) = weights(&a.weights)?;
-    let inv = Inverter::new(Preset::by_name(&a.preset)?, &bytes, &name, light);
+    let (bytes, name) = a.net.load()?;
+    let inv = Inverter::new(a.net.preset()?, &bytes, &name, light);
     let o = InvertOptions { steps: a.steps, ..Default::default() };
     let bar = ProgressBar::new(a.samples as u64);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} images [{elapsed_precise}<{eta_precise}]").expect("static template"));
@@ -192,23 +183,4 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
     println!("radius relative error: median {:.3}", median(&radius));
     println!("{:.1} s per image (mean)", secs.mean);
     Ok(())
-}
-
-/// Median of `xs` (NaN when empty).
-fn median(xs: &[f64]) -> f64 {
-    let mut v = xs.to_vec();
-    v.sort_by(|a, b| a.total_cmp(b));
-    match v.len() {
-        0 => f64::NAN,
-        n if n % 2 == 1 => v[n / 2],
-        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
-    }
-}
-
-/// The weights' bytes and a name for errors: the file, or the embedded tiny Phong weights.
-fn weights(path: &Option<PathBuf>) -> Result<(Vec<u8>, String)> {
-    match path {
-        Some(p) => Ok((std::fs::read(p).map_err(|e| Error::Io { path: p.display().to_string(), source: e })?, p.display().to_string())),
-        None => Ok((TINY_PHONG_WEIGHTS.to_vec(), "embedded tiny-phong weights".to_string())),
-    }
 }

@@ -10,3 +10,4 @@ pub mod render;
 pub mod stress;
 pub mod train;
 pub mod truth;
+pub mod weights;

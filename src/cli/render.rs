@@ -2,11 +2,10 @@
 
 use super::truth::{SceneArgs, load};
 use clap::Args;
-use rendernet::nn::render::{CROP_MARGIN, Renderer, TINY_PHONG_WEIGHTS};
-use rendernet::nn::rendernet::Preset;
+use rendernet::nn::render::{CROP_MARGIN, Renderer};
 use rendernet::metrics::Scores;
 use rendernet::reference::{self, Image, Options, Shader};
-use rendernet::{Error, Gpu, Result};
+use rendernet::{Gpu, Result};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -15,14 +14,8 @@ use std::time::Instant;
 pub struct RenderArgs {
     #[command(flatten)]
     scene: SceneArgs,
-    /// Weights: a safetensors file from `rendernet train` (<out>.weights.safetensors, or the
-    /// checkpoint <out> itself, whose Adam state is ignored); default: the embedded tiny
-    /// Phong weights.
-    #[arg(long)]
-    weights: Option<PathBuf>,
-    /// Network size the weights belong to.
-    #[arg(long, default_value = "tiny")]
-    preset: String,
+    #[command(flatten)]
+    net: super::weights::WeightsArgs,
     /// Image side in pixels (a multiple of 8 for the tiny preset).
     #[arg(long, default_value_t = 128, allow_negative_numbers = true)]
     size: usize,
@@ -50,11 +43,8 @@ pub fn run(a: RenderArgs) -> Result<()> {
     super::output::check_png_out(&a.out)?;
     let (grid, what) = load(&a.scene)?;
     let gpu = Gpu::new()?;
-    let preset = Preset::by_name(&a.preset)?;
-    let (bytes, name) = match &a.weights {
-        Some(p) => (std::fs::read(p).map_err(|e| Error::Io { path: p.display().to_string(), source: e })?, p.display().to_string()),
-        None => (TINY_PHONG_WEIGHTS.to_vec(), "embedded tiny-phong weights".to_string()),
-    };
+    let preset = a.net.preset()?;
+    let (bytes, name) = a.net.load()?;
     let mut net = Renderer::new(&gpu, preset, &bytes, &name, a.size)?.with_crop_margin((!a.no_crop).then_some(a.crop_margin));
     let (view, light) = (a.scene.view(), a.scene.light());
     let t1 = Instant::now();

@@ -5,8 +5,7 @@
 use super::truth::{SceneArgs, load};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use rendernet::nn::render::{Renderer, TINY_PHONG_WEIGHTS};
-use rendernet::nn::rendernet::Preset;
+use rendernet::nn::render::Renderer;
 use rendernet::chart::{self, Cap, Options};
 use rendernet::metrics::PSNR_CAP;
 use rendernet::reference;
@@ -21,12 +20,8 @@ pub struct StressArgs {
     /// The clean scene (default: the bunny at the default view and light).
     #[command(flatten)]
     scene: SceneArgs,
-    /// Weights of a Phong RenderNet; default: the embedded tiny Phong weights.
-    #[arg(long)]
-    weights: Option<PathBuf>,
-    /// Network size the weights belong to.
-    #[arg(long, default_value = "tiny")]
-    preset: String,
+    #[command(flatten)]
+    net: super::weights::WeightsArgs,
     /// Seed of the random corruptions.
     #[arg(long, default_value_t = 0)]
     noise_seed: u64,
@@ -51,15 +46,12 @@ pub fn run(a: StressArgs) -> Result<()> {
     if !charts.is_dir() {
         return Err(Error::Invalid(format!("--charts {}: not a folder that exists", charts.display())));
     }
-    let preset = Preset::by_name(&a.preset)?;
+    let preset = a.net.preset()?;
     let size = preset.image_for(preset.cam);
     a.scene.validate(size)?;
     let (grid, what) = load(&a.scene)?;
     let gpu = Gpu::new()?;
-    let (bytes, name) = match &a.weights {
-        Some(p) => (std::fs::read(p).map_err(|e| Error::Io { path: p.display().to_string(), source: e })?, p.display().to_string()),
-        None => (TINY_PHONG_WEIGHTS.to_vec(), "embedded tiny-phong weights".to_string()),
-    };
+    let (bytes, name) = a.net.load()?;
     let mut net = Renderer::new(&gpu, preset, &bytes, &name, size)?;
     let bar = ProgressBar::new(0);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} scenes [{elapsed_precise}]").expect("static template"));

@@ -1,0 +1,36 @@
+//! The trained network a command uses: shared by `render`, `invert`, `eval-invert` and
+//! `stress`.
+
+use clap::Args;
+use rendernet::nn::render::TINY_PHONG_WEIGHTS;
+use rendernet::nn::rendernet::Preset;
+use rendernet::{Error, Result};
+use std::path::PathBuf;
+
+/// `--weights` and `--preset`.
+#[derive(Args, Debug)]
+pub struct WeightsArgs {
+    /// Weights: a safetensors file from `rendernet train` (<out>.weights.safetensors, or the
+    /// checkpoint <out> itself, whose Adam state is ignored); default: the embedded tiny
+    /// Phong weights.
+    #[arg(long)]
+    pub weights: Option<PathBuf>,
+    /// Network size the weights belong to.
+    #[arg(long, default_value = "tiny")]
+    pub preset: String,
+}
+
+impl WeightsArgs {
+    /// The preset `--preset` names.
+    pub fn preset(&self) -> Result<Preset> {
+        Preset::by_name(&self.preset)
+    }
+
+    /// The weights' bytes and a name for messages.
+    pub fn load(&self) -> Result<(Vec<u8>, String)> {
+        match &self.weights {
+            Some(p) => Ok((std::fs::read(p).map_err(|e| Error::Io { path: p.display().to_string(), source: e })?, p.display().to_string())),
+            None => Ok((TINY_PHONG_WEIGHTS.to_vec(), "embedded tiny-phong weights".to_string())),
+        }
+    }
+}
