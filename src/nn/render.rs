@@ -9,8 +9,8 @@ use crate::graph::Executor;
 use crate::reference::{Image, Light, View};
 use crate::voxel::VoxelGrid;
 
-/// The shipped weights: the tiny preset trained for Phong on procedural chairs (see
-/// weights/README.md for the command that reproduced them and their training curve).
+/// The shipped weights: the tiny preset trained for Phong on procedural chairs, tables, sofas
+/// and primitives (weights/README.md: the commands that made them, their log and curve).
 pub const TINY_PHONG_WEIGHTS: &[u8] = include_bytes!("../../weights/tiny-phong.safetensors");
 
 /// A RenderNet ready to render, for one image size.
