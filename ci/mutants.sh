@@ -6,9 +6,10 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 source ci/lavapipe.sh
 survived=0
-while IFS='|' read -r file expr test; do
-    [[ -z "$file" || "$file" == \#* ]] && continue
-    file=$(echo "$file" | xargs); test=$(echo "$test" | xargs)
+while read -r line; do
+    [[ -z "$line" || "$line" == \#* ]] && continue
+    # Fields are separated by " | " (spaces around the bar), so an expression may hold "||".
+    file=${line%% | *}; rest=${line#* | }; test=${rest##* | }; expr=${rest% | *}
     cp "$file" /tmp/mutant.bak
     sed -i "$expr" "$file"
     if cmp -s "$file" /tmp/mutant.bak; then
