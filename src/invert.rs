@@ -146,14 +146,19 @@ impl Inverter {
     }
 
     /// Scores starts by silhouette inside `win`: the predicted mask's area and IoU with `fg`
-    /// (the window's pixels).
-    fn silhouettes(&self, gpu: &Gpu, grid: &[f32], fg: &[bool], starts: &[Vars], win: &Window) -> Result<Vec<(f64, f64)>> {
-        let (net, mut ex, _) = self.executor(gpu, starts.len(), false, win)?;
-        self.feed(gpu, &net, &ex, grid, starts, win)?;
+    /// (the window's pixels). `sil` is a forward-only network built once per inversion for
+    /// `batch` starts; a shorter list is padded with its last start.
+    fn silhouettes(&self, gpu: &Gpu, sil: &mut (RenderNet, Executor), grid: &[f32], fg: &[bool], starts: &[Vars], win: &Window) -> Result<Vec<(f64, f64)>> {
+        let (net, ex) = sil;
+        let batch = net.graph.info(net.pose).shape[0];
+        let mut padded = starts.to_vec();
+        padded.resize(batch, *starts.last().expect("at least one start"));
+        self.feed(gpu, net, ex, grid, &padded, win)?;
         ex.forward(gpu)?;
         let mask = ex.read(gpu, net.maps.expect("Phong head")[2])?;
         Ok(mask
             .chunks(fg.len())
+            .take(starts.len())
             .map(|m| {
                 let (mut inter, mut uni, mut area) = (0usize, 0usize, 0usize);
                 for (&v, &t) in m.iter().zip(fg) {
@@ -194,6 +199,8 @@ impl Inverter {
         let target_area = fg.iter().filter(|&&f| f).count() as f64;
         let gv = self.grid_values(grid)?;
         let base = Light::default();
+        let (net, ex, _) = self.executor(gpu, o.azimuths, false, &win)?;
+        let mut sil = (net, ex);
         // Coarse pass: silhouettes at the mid radius, one elevation row per batch.
         let mut scored: Vec<(f64, Vars)> = Vec::new();
         for e in 0..o.elevations {
@@ -201,7 +208,7 @@ impl Inverter {
             let row: Vec<Vars> = (0..o.azimuths)
                 .map(|a| Vars([360.0 * a as f64 / o.azimuths as f64, el, COARSE_RADIUS.ln(), base.azimuth, base.elevation]))
                 .collect();
-            for ((area, iou), mut v) in self.silhouettes(gpu, &gv, &fg, &row, &win)?.into_iter().zip(row) {
+            for ((area, iou), mut v) in self.silhouettes(gpu, &mut sil, &gv, &fg, &row, &win)?.into_iter().zip(row) {
                 // Area scales with 1 / radius^2: the radius that matches the image's area.
                 v.0[2] = (COARSE_RADIUS * (area.max(1.0) / target_area).sqrt()).ln();
                 v.clamp();
@@ -213,7 +220,7 @@ impl Inverter {
         let starts: Vec<Vars> = scored.iter().take(RESCORED.max(o.keep)).map(|s| s.1).collect();
         let mut rescored = Vec::new();
         for chunk in starts.chunks(o.azimuths) {
-            for ((_, iou), v) in self.silhouettes(gpu, &gv, &fg, chunk, &win)?.into_iter().zip(chunk) {
+            for ((_, iou), v) in self.silhouettes(gpu, &mut sil, &gv, &fg, chunk, &win)?.into_iter().zip(chunk) {
                 rescored.push((iou, *v));
             }
         }
@@ -415,17 +422,22 @@ fn chain(v: &Vars, gp: &[f32], gl: &[f32], p: &Preset) -> [f64; 5] {
     ]
 }
 
-/// Unit vector from the object towards the camera for `view`'s azimuth and elevation (polar
-/// angle from the up axis), for measuring pose errors as angles.
-pub fn view_direction(view: &View) -> [f64; 3] {
-    let (az, el) = (view.azimuth.to_radians(), view.elevation.to_radians());
+/// Unit vector of azimuth `az` and polar angle `el` (degrees) about the up axis:
+/// `(sin az · sin el, cos el, cos az · sin el)`.
+fn polar_unit(az: f64, el: f64) -> [f64; 3] {
+    let (az, el) = (az.to_radians(), el.to_radians());
     [az.sin() * el.sin(), el.cos(), az.cos() * el.sin()]
+}
+
+/// A unit vector for `view`'s azimuth and elevation, for measuring pose errors as angles
+/// (the angle between two views' vectors is the angle between their camera directions).
+pub fn view_direction(view: &View) -> [f64; 3] {
+    polar_unit(view.azimuth, view.elevation)
 }
 
 /// Unit vector towards the light in the camera frame ([`Light::direction`] in f64).
 pub fn light_direction(light: &Light) -> [f64; 3] {
-    let (az, el) = (light.azimuth.to_radians(), light.elevation.to_radians());
-    [az.sin() * el.sin(), el.cos(), az.cos() * el.sin()]
+    polar_unit(light.azimuth, light.elevation)
 }
 
 /// Angle in degrees between two unit vectors.

@@ -30,6 +30,9 @@ pub struct Renderer {
 /// less than 0.05 dB against the reference (tests/model.rs measures it).
 pub const CROP_MARGIN: usize = 2;
 
+/// Networks (one per window size) a [`Renderer`] keeps built.
+const MAX_WINDOWS: usize = 6;
+
 impl Renderer {
     /// Builds the Phong network of `preset` for `size`-pixel images (a multiple of
     /// `2^(up stages + 2)`; the network is fully convolutional, so any such size works) and
@@ -57,6 +60,10 @@ impl Renderer {
     fn net_for(&mut self, gpu: &Gpu, hw: [usize; 2]) -> Result<usize> {
         if let Some(i) = self.nets.iter().position(|n| n.0 == hw) {
             return Ok(i);
+        }
+        // A few windows are kept (a turntable revisits them); more would only hold GPU memory.
+        if self.nets.len() == MAX_WINDOWS {
+            self.nets.remove(1); // index 0 is the whole frame, built first
         }
         let net = RenderNet::build(&self.preset, Head::Phong(phong_of(&Light::default())), 1, hw, false)?;
         let mut ex = Executor::new(gpu, net.graph.clone(), 0)?;
