@@ -1,24 +1,54 @@
 #!/usr/bin/env bash
-# Proves the kernel tests can fail: applies each mutation in ci/mutants.txt (one per line:
-# shader file | sed expression | test target), runs that test, and reports any mutation
-# the tests did NOT catch (or those of the file given as $1). Restores every file. Not part of CI (it rebuilds per mutation).
+# Proves the tests can fail: applies each mutation in ci/mutants.txt (one per line:
+# file | sed expression | test target [test-name filter]), runs that test, and fails if a
+# mutation survives or no longer applies.
+# - Shader mutants are applied to a copy of shaders/ that RENDERNET_SHADER_DIR points at, so
+#   they need no rebuild: all of them run every time.
+# - Rust mutants edit the file in place and rebuild. MUTANTS_RUST=all (default) runs every
+#   one; =rotate runs one a day, in turn (CI: each is run within a few days); =none skips them.
+# Usage: bash ci/mutants.sh [mutants file]. Every edited file is restored, even on Ctrl-C.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 source ci/lavapipe.sh
-survived=0
+list=${1:-ci/mutants.txt}
+mode=${MUTANTS_RUST:-all}
+work=$(mktemp -d)
+backup=""
+restore() { [[ -n "$backup" ]] && cp "$work/original" "$backup"; rm -rf "$work"; }
+trap restore EXIT
+trap 'exit 130' INT TERM
+cargo test -q --no-run 2>/dev/null || { echo "the tests do not build"; exit 1; }
+rust_lines=$(grep -v '^#' "$list" | grep -c '^src/')
+today=$(( $(date +%s) / 86400 ))
+failed=0 caught=0 rust_seen=0
+start=$(date +%s)
 while read -r line; do
     [[ -z "$line" || "$line" == \#* ]] && continue
     # Fields are separated by " | " (spaces around the bar), so an expression may hold "||".
     file=${line%% | *}; rest=${line#* | }; test=${rest##* | }; expr=${rest% | *}
-    cp "$file" /tmp/mutant.bak
-    sed -i "$expr" "$file"
-    if cmp -s "$file" /tmp/mutant.bak; then
-        echo "NOT APPLIED  $file: $expr"; survived=1
-    elif cargo test -q --test "$test" >/dev/null 2>&1; then
-        echo "SURVIVED     $file: $expr ($test)"; survived=1
+    target=${test%% *}; filter=${test#"$target"}
+    if [[ "$file" == shaders/* ]]; then
+        rm -rf "$work/shaders"; cp -r shaders "$work/shaders"
+        target_file="$work/$file"; original=$file; env=(RENDERNET_SHADER_DIR="$work/shaders")
     else
-        echo "caught       $file: $expr ($test)"
+        rust_seen=$((rust_seen + 1))
+        [[ "$mode" == none ]] && continue
+        [[ "$mode" == rotate && $(( (rust_seen - 1) != today % rust_lines )) == 1 ]] && continue
+        cp "$file" "$work/original"; backup=$file
+        target_file=$file; original="$work/original"; env=()
     fi
-    cp /tmp/mutant.bak "$file"
-done < "${1:-ci/mutants.txt}"
-exit $survived
+    sed -i "$expr" "$target_file"
+    if cmp -s "$target_file" "$original"; then
+        echo "NOT APPLIED  $file: $expr"; failed=1
+    elif [[ -n "$backup" ]] && ! cargo test -q --no-run --test "$target" >/dev/null 2>&1; then
+        # A mutant that does not compile proves nothing about the tests.
+        echo "NO BUILD     $file: $expr"; failed=1
+    elif env "${env[@]}" cargo test -q --test "$target" -- $filter >/dev/null 2>&1; then
+        echo "SURVIVED     $file: $expr ($test)"; failed=1
+    else
+        echo "caught       $file: $expr ($test)"; caught=$((caught + 1))
+    fi
+    if [[ -n "$backup" ]]; then cp "$work/original" "$backup"; backup=""; fi
+done < "$list"
+echo "mutants: $caught caught, $(( $(date +%s) - start )) s; Rust mutants: $mode"
+exit $failed

@@ -7,7 +7,7 @@ mod common;
 
 use clap::Parser;
 use rendernet::Gpu;
-use rendernet::reference::{Light, Renderer, Shader, View, write_png};
+use rendernet::reference::{Light, RayMarcher, Shader, View, write_png};
 use rendernet::voxel::{self, Mesh, VoxelizeOptions, shapes};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -29,7 +29,7 @@ fn run(a: Args) -> Result<(), Box<dyn std::error::Error>> {
         None => shapes::chair(0).to_grid(64)?,
     };
     let gpu = Gpu::new()?;
-    let renderer = Renderer::new(&gpu);
+    let renderer = RayMarcher::new(&gpu);
     let s = 128u32;
     let mut sheet = image::RgbImage::new(s * Shader::ALL.len() as u32, s);
     for (i, shader) in Shader::ALL.into_iter().enumerate() {

@@ -31,6 +31,18 @@ fn flags_nan_and_inf_and_nothing_else() {
         finite::any(g, p, &flags, 3)
     });
     assert_eq!(download(&flags), [0.0, 0.0, 0.0, 0.0, 0.0], "a clean step clears the flags");
+    // The summary sees the first slot alone and the last slot alone.
+    for bad in [1, 3] {
+        run(|p| {
+            for k in 1..=3 {
+                finite::check(g, p, if k == bad { &ts[1] } else { &ts[0] }, &flags, k)?;
+            }
+            finite::any(g, p, &flags, 3)
+        });
+        let mut want = [0.0; 5];
+        (want[0], want[bad]) = (1.0, 1.0);
+        assert_eq!(download(&flags), want, "only slot {bad} is set");
+    }
     assert!(gpu().run(|p| finite::check(g, p, &ts[0], &flags, 0)).is_err(), "slot 0 is the summary");
 }
 

@@ -88,8 +88,8 @@ const FMA_FLOPS_PER_ITER: f64 = 8.0 * 4.0 * 4.0 * 2.0;
 /// nothing but independent FMAs (`shaders/bench_fma.wgsl`), for reading kernel speeds as a
 /// fraction of what this adapter reaches at all.
 pub fn fma_ceiling(gpu: &Gpu, clock: Clock, samples: usize) -> Result<f64> {
-    use crate::gpu::{Arg, Shader, Tensor, grid_1d};
-    const SHADER: Shader = Shader { name: "bench_fma", source: include_str!("../shaders/bench_fma.wgsl") };
+    use crate::gpu::{Arg, Shader, Tensor, grid_1d, wgsl};
+    const SHADER: Shader = wgsl!("bench_fma");
     #[repr(C)]
     #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
     struct Params {

@@ -6,15 +6,16 @@
 use crate::error::Result;
 use crate::gpu::Gpu;
 use crate::metrics::Scores;
-use crate::nn::render::Renderer as NetRenderer;
-use crate::reference::{Image, Light, Options, Renderer, Shader, View};
+use crate::nn::render::Renderer;
+use crate::reference::{Image, Light, Options, RayMarcher, Shader, View};
 use crate::voxel::VoxelGrid;
 use crate::rng::SplitMix64;
 
 /// One scored image of a sweep.
 #[derive(Clone, Debug)]
 pub struct Row {
-    /// Sweep name (`dropout`, `salt`, `value-noise`, `downsample`, `two-objects`, `view`).
+    /// Sweep name (`dropout`, `salt`, `value-noise`, `downsample`, `two-objects`, `view`,
+    /// `unseen`).
     pub sweep: &'static str,
     /// What varies along the sweep: a fraction, a factor, a gap in voxels, or a view index.
     pub level: f64,
@@ -158,10 +159,25 @@ fn cases(grid: &VoxelGrid, view: &View, light: &Light, seed: u64) -> Result<Vec<
 
 /// Runs every sweep on `grid` seen from `view` under `light`: RenderNet (`net`) and the
 /// reference renderer on each corrupted grid, both scored against the reference image of
-/// the clean grid. `progress(done, total)` after each case.
-pub fn run(gpu: &Gpu, net: &mut NetRenderer, grid: &VoxelGrid, view: &View, light: &Light, seed: u64, mut progress: impl FnMut(usize, usize)) -> Result<Vec<Row>> {
-    let cases = cases(grid, view, light, seed)?;
-    let reference = Renderer::new(gpu).with_options(Options { supersample: 2, ..Options::default() });
+/// the clean grid. `unseen` adds the sweep `unseen`: each named shape (e.g. real meshes no
+/// training set holds) clean, at the same view and light. `progress(done, total)` after
+/// each case.
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    gpu: &Gpu,
+    net: &mut Renderer,
+    grid: &VoxelGrid,
+    view: &View,
+    light: &Light,
+    seed: u64,
+    unseen: &[(String, VoxelGrid)],
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Vec<Row>> {
+    let mut cases = cases(grid, view, light, seed)?;
+    for (i, (name, g)) in unseen.iter().enumerate() {
+        cases.push(Case { sweep: "unseen", level: i as f64, label: name.clone(), grid: g.clone(), clean: g.clone(), view: *view, light: *light });
+    }
+    let reference = RayMarcher::new(gpu).with_options(Options { supersample: 2, ..Options::default() });
     let size = net.size() as u32;
     let mut rows = Vec::new();
     for (k, c) in cases.iter().enumerate() {

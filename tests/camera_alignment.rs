@@ -5,7 +5,7 @@
 
 use rendernet::nn::camera::{input_dims, input_values, pose_for_view};
 use rendernet::ops::resample;
-use rendernet::reference::{Light, Renderer, Shader, View};
+use rendernet::reference::{Light, RayMarcher, Shader, View};
 use rendernet::voxel::shapes;
 use rendernet::{Gpu, Tensor};
 
@@ -19,7 +19,7 @@ fn silhouette_iou(gpu: &Gpu, view: View, crop: Option<[usize; 4]>) -> f64 {
     let y = Tensor::zeros(gpu, &[1, 1, cam, hh, ww]).unwrap();
     gpu.run(|p| resample::forward(gpu, p, &x, &pose, &y)).unwrap();
     let y = y.to_vec(gpu).unwrap();
-    let mask = Renderer::new(gpu).render(gpu, &grid, &view, &Light::default(), Shader::Mask, cam as u32).unwrap();
+    let mask = RayMarcher::new(gpu).render(gpu, &grid, &view, &Light::default(), Shader::Mask, cam as u32).unwrap();
     let (mut inter, mut union) = (0.0, 0.0);
     for i in 0..hh {
         for j in 0..ww {

@@ -8,7 +8,7 @@ use rendernet::data::{
     self, Dataset, GenerateOptions, Shapes, Split,
     generate::{sample_poses, shape_seed},
 };
-use rendernet::reference::{Light, Options, Renderer, Shader, View};
+use rendernet::reference::{Light, Options, RayMarcher, Shader, View};
 use rendernet::voxel::shapes::chair;
 use std::collections::BTreeSet;
 use std::path::PathBuf;
@@ -165,7 +165,7 @@ fn reader_returns_what_was_generated() {
             ("phong", [3, 32, 32])
         ]
     );
-    let renderer = Renderer::new(gpu()).with_options(Options {
+    let renderer = RayMarcher::new(gpu()).with_options(Options {
         supersample: 1,
         ..Options::default()
     });

@@ -21,7 +21,7 @@ fn pose_and_light_gradients_match_finite_differences() {
     let bunny = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/fixtures/bunny64.safetensors")).unwrap();
     let grid = voxel::safetensors_io::from_bytes(&bunny, "bunny64").unwrap();
     let (view, light) = (View { azimuth: 40.0, elevation: 75.0, radius: 3.6 }, Light { azimuth: 20.0, elevation: 70.0, ..Light::default() });
-    let target = reference::Renderer::new(&gpu).render(&gpu, &grid, &view, &light, Shader::Phong, 128).unwrap();
+    let target = reference::RayMarcher::new(&gpu).render(&gpu, &grid, &view, &light, Shader::Phong, 128).unwrap();
     let inv = Inverter::new(Preset::tiny(), TINY_PHONG_WEIGHTS, "embedded", Light::default());
     // A start off the truth in every unknown, so every gradient component is far from zero.
     let base = [52.0, 95.0, 3.9f64.ln(), 45.0, 90.0];

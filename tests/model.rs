@@ -35,6 +35,11 @@ fn rendernet(args: &[&str]) -> String {
     o.to_string()
 }
 
+/// `dataset`, `train`, `--resume` and `eval` from the command line. A run interrupted at
+/// step 2 and resumed to step 4 must end with weights bit-identical to an uninterrupted
+/// 4-step run: that holds only if every kernel is deterministic (no float atomics), the
+/// checkpoint carries the Adam moments and the step, and the resumed run draws the same
+/// samples, crops, corruptions and dropout masks.
 #[test]
 fn dataset_train_resume_and_eval_from_the_command_line() {
     let dir = std::env::temp_dir().join(format!("rendernet-model-test-{}", std::process::id()));
@@ -43,19 +48,35 @@ fn dataset_train_resume_and_eval_from_the_command_line() {
     let d = data.to_str().unwrap();
     rendernet(&["dataset", "--count", "2", "--views", "2", "--res", "16", "--image", "128", "--seed", "3", "--out", d]);
     let c = ckpt.to_str().unwrap();
-    let common = ["--data", d, "--out", c, "--eval-samples", "1", "--eval-every", "2"];
-    let out = rendernet(&[&["train", "--steps", "2"][..], &common[..]].concat());
+    // A fixed crop keeps the window schedule independent of --steps; augmentation on, so
+    // the resumed run must also repeat the corruptions.
+    let common = ["--data", d, "--eval-samples", "1", "--eval-every", "2", "--crop", "16", "--batch", "2", "--augment-dropout", "0.5", "--augment-salt", "0.1"];
+    let out = rendernet(&[&["train", "--steps", "2", "--out", c][..], &common[..]].concat());
     assert!(out.contains("final held-out PSNR"), "{out}");
     for f in [ckpt.clone(), ckpt.with_extension("weights.safetensors"), ckpt.with_extension("curve.png")] {
         assert!(f.exists(), "{} missing", f.display());
     }
-    let out = rendernet(&[&["train", "--steps", "4", "--resume", c][..], &common[..]].concat());
+    let out = rendernet(&[&["train", "--steps", "4", "--resume", c, "--out", c][..], &common[..]].concat());
     assert!(out.contains("final held-out PSNR"), "{out}");
     // The log spans the interruption: losses of steps 1..=4 and evaluations at 2 and 4.
     let log = std::fs::read_to_string(ckpt.with_extension("log.csv")).unwrap();
     let losses = log.lines().filter(|l| l.ends_with(',')).count();
     assert_eq!(losses, 4, "{log}");
     assert!(log.contains("\n2,,") && log.contains("\n4,,"), "{log}");
+    let straight = dir.join("straight.ckpt");
+    rendernet(&[&["train", "--steps", "4", "--out", straight.to_str().unwrap()][..], &common[..]].concat());
+    let tensors = |p: std::path::PathBuf| {
+        let bytes = std::fs::read(&p).unwrap();
+        let st = safetensors::SafeTensors::deserialize(&bytes).unwrap();
+        let mut v: Vec<(String, Vec<u8>)> = st.tensors().into_iter().map(|(n, t)| (n, t.data().to_vec())).collect();
+        v.sort();
+        v
+    };
+    let (resumed, uninterrupted) = (tensors(ckpt.with_extension("weights.safetensors")), tensors(straight.with_extension("weights.safetensors")));
+    assert_eq!(resumed.len(), uninterrupted.len());
+    for ((n, a), (_, b)) in resumed.iter().zip(&uninterrupted) {
+        assert!(a == b, "{n}: the resumed run's weights differ from the uninterrupted run's");
+    }
     let w = ckpt.with_extension("weights.safetensors");
     let out = rendernet(&["eval", "--weights", w.to_str().unwrap(), "--data", d, "--json"]);
     assert!(out.contains("\"psnr_mean\"") && out.contains("\"per_shape\""), "{out}");
@@ -76,7 +97,7 @@ fn shipped_weights_render_an_unseen_shape_close_to_the_reference() {
     let mut net = Renderer::new(&gpu, Preset::tiny(), TINY_PHONG_WEIGHTS, "embedded", 128).unwrap();
     let img = net.render(&gpu, &grid, &view, &light).unwrap();
     let opts = reference::Options { supersample: 2, ..reference::Options::default() };
-    let truth = reference::Renderer::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, 128).unwrap();
+    let truth = reference::RayMarcher::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, 128).unwrap();
     let s = Scores::of(&img, &truth);
     let black = Scores::black_floor(&truth);
     eprintln!("object PSNR {:.2} dB (all-black {:.2}), full-frame {:.2}, SSIM {:.3}", s.object_psnr, black.object_psnr, s.psnr, s.ssim);
@@ -101,7 +122,7 @@ fn cropping_to_the_object_keeps_the_picture_and_halves_the_work() {
     let grid = rendernet::voxel::safetensors_io::from_bytes(&bunny, "bunny64").unwrap();
     let (view, light) = (View::default(), Light::default());
     let opts = reference::Options { supersample: 2, ..reference::Options::default() };
-    let truth = reference::Renderer::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, 128).unwrap();
+    let truth = reference::RayMarcher::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, 128).unwrap();
     let score = |margin: Option<usize>| {
         let mut net = Renderer::new(&gpu, Preset::tiny(), TINY_PHONG_WEIGHTS, "embedded", 128).unwrap().with_crop_margin(margin);
         Scores::of(&net.render(&gpu, &grid, &view, &light).unwrap(), &truth).object_psnr
@@ -112,4 +133,38 @@ fn cropping_to_the_object_keeps_the_picture_and_halves_the_work() {
     assert!((default - full).abs() <= 0.05, "{default} vs {full}");
     let w = object_window(&grid.resample_to(32).unwrap(), &view, 64, CROP_MARGIN);
     assert!(w[2] * w[3] * 2 <= 64 * 64, "window {w:?} is more than half the frame");
+}
+
+/// A grid past the device's storage-binding limit (330^3 f32 = 144 MB; lavapipe binds at
+/// most 128 MiB) either renders or fails with an error naming the limit, in both renderers:
+/// never a panic, a driver crash or a garbage image.
+#[test]
+fn grids_past_the_device_limits_run_or_fail_clearly() {
+    let gpu = Gpu::new().unwrap();
+    let n = 330;
+    let mut grid = rendernet::voxel::VoxelGrid::zeros([n; 3]).unwrap();
+    for z in n / 4..3 * n / 4 {
+        for y in n / 4..3 * n / 4 {
+            for x in n / 3..2 * n / 3 {
+                grid.set(z, y, x, 1.0);
+            }
+        }
+    }
+    let (view, light) = (View::default(), Light::default());
+    let check = |what: &str, r: rendernet::Result<reference::Image>| match r {
+        Ok(img) => {
+            assert!(img.data.iter().all(|v| v.is_finite()), "{what}: non-finite pixels");
+            assert!(img.data.iter().any(|&v| v > 0.1), "{what}: blank image");
+            eprintln!("{what}: rendered");
+        }
+        Err(e) => {
+            let msg = e.to_string();
+            eprintln!("{what}: {msg}");
+            assert!(msg.contains("max_") || msg.contains("limit"), "{what}: the error does not name a limit: {msg}");
+        }
+    };
+    let mut net = Renderer::new(&gpu, Preset::tiny(), TINY_PHONG_WEIGHTS, "embedded", 64).unwrap();
+    check("network", net.render(&gpu, &grid, &view, &light));
+    let opts = reference::Options { supersample: 1, ..reference::Options::default() };
+    check("reference", reference::RayMarcher::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, 64));
 }

@@ -182,7 +182,7 @@ fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine) -> Result<Vec<(String, serd
     let head = Head::Phong(phong_of(&Light::default()));
     let mut rows = Vec::new();
     // The default scene's window: `render` crops the camera grid to the object (nn::render).
-    let bunny = rendernet::voxel::safetensors_io::from_bytes(super::truth::BUNNY, "bunny64")?.resample_to(p.input)?;
+    let bunny = rendernet::voxel::bunny().resample_to(p.input)?;
     let crop = object_window(&bunny, &View::default(), p.cam, CROP_MARGIN);
     let cases = [("forward", [p.cam; 2], false, ""), ("forward", [crop[2], crop[3]], false, " (bunny crop)"), ("train_step", [p.cam / 2; 2], true, "")];
     for (pass, win, train, what) in cases {

@@ -67,7 +67,7 @@ pub fn run(a: InvertArgs) -> Result<()> {
         None => {
             let (view, light) = (a.scene.view(), a.scene.light());
             let opts = Options { supersample: 2, ..Options::default() };
-            let img = reference::Renderer::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, inv.size() as u32)?;
+            let img = reference::RayMarcher::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, inv.size() as u32)?;
             (img, Some((view, light)))
         }
     };

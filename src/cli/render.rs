@@ -52,7 +52,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let render_s = t1.elapsed().as_secs_f64();
     if a.compare {
         let opts = Options { supersample: 2, ..Options::default() };
-        let truth = reference::Renderer::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, a.size as u32)?;
+        let truth = reference::RayMarcher::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, a.size as u32)?;
         println!("against the reference renderer: {}", compare_line(&Scores::of(&img, &truth), &Scores::black_floor(&truth)));
         save_pair(&img, &truth, &a.out)?;
     } else {

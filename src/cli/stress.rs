@@ -10,7 +10,7 @@ use rendernet::chart::{self, Cap, Options};
 use rendernet::metrics::PSNR_CAP;
 use rendernet::reference;
 use rendernet::stress::{self, Row};
-use rendernet::{Error, Gpu, Result};
+use rendernet::{Error, Gpu, Result, VoxelGrid};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -36,6 +36,32 @@ pub struct StressArgs {
     /// Print JSON rows (sweep, level, label, method, scores) instead of tables.
     #[arg(long)]
     json: bool,
+    /// Add the sweep `unseen`: every grid or mesh file in DIR (e.g. `datasets/real` after
+    /// `datasets/fetch_real.sh`; meshes voxelised at --resolution), clean, at the same view
+    /// and light.
+    #[arg(long, value_name = "DIR")]
+    unseen: Option<PathBuf>,
+}
+
+/// The scene files of `dir` (extensions `voxel::load` reads), sorted, loaded.
+fn unseen_shapes(dir: &Path, resolution: usize) -> Result<Vec<(String, VoxelGrid)>> {
+    let entries = std::fs::read_dir(dir).map_err(|e| Error::Invalid(format!("--unseen {}: {e}", dir.display())))?;
+    let known = ["binvox", "safetensors", "vox", "obj", "off", "ply"];
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().and_then(|e| e.to_str()).is_some_and(|e| known.contains(&e.to_ascii_lowercase().as_str())))
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        return Err(Error::Invalid(format!("--unseen {}: no .binvox, .safetensors, .vox, .obj, .off or .ply file", dir.display())));
+    }
+    files
+        .iter()
+        .map(|p| {
+            let name = p.file_stem().and_then(|s| s.to_str()).unwrap_or("shape").to_string();
+            Ok((name, rendernet::voxel::load(p, resolution).map_err(|e| Error::Invalid(e.to_string()))?))
+        })
+        .collect()
 }
 
 /// Runs the sweeps, prints the tables or JSON, writes the contact sheet.
@@ -55,7 +81,11 @@ pub fn run(a: StressArgs) -> Result<()> {
     let mut net = Renderer::new(&gpu, preset, &bytes, &name, size)?;
     let bar = ProgressBar::new(0);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} scenes [{elapsed_precise}]").expect("static template"));
-    let rows = stress::run(&gpu, &mut net, &grid, &a.scene.view(), &a.scene.light(), a.noise_seed, |done, total| {
+    let unseen = match &a.unseen {
+        Some(dir) => unseen_shapes(dir, a.scene.resolution)?,
+        None => Vec::new(),
+    };
+    let rows = stress::run(&gpu, &mut net, &grid, &a.scene.view(), &a.scene.light(), a.noise_seed, &unseen, |done, total| {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
     })?;
@@ -114,6 +144,7 @@ fn sweep_axis(sweep: &str) -> (&'static str, &'static str, Option<f64>) {
         "downsample" => ("Downsampled grid", "grid resolution after downsampling (voxels)", None),
         "two-objects" => ("Two objects", "two copies at 3/8 size: gap between them in voxels (negative: overlapping)", None),
         "view" => ("Extreme view and light", "camera or light change from the default scene (clean grid)", None),
+        "unseen" => ("Unseen shapes", "shape (clean grid, default view and light)", None),
         _ => ("Sweep", "level", Some(1.0)),
     }
 }

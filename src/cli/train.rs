@@ -3,7 +3,7 @@
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rendernet::nn::rendernet::Preset;
-use rendernet::train::{Progress, TrainConfig, train};
+use rendernet::train::{Augment, Progress, TrainConfig, train};
 use rendernet::{Error, Gpu, Result};
 use std::path::PathBuf;
 
@@ -56,6 +56,14 @@ pub struct TrainArgs {
     /// the growing crop schedule; for fine-tuning a resumed checkpoint.
     #[arg(long)]
     crop: Option<usize>,
+    /// Robustness training: half the samples lose a random fraction (up to this) of their
+    /// occupied voxels; the target stays the clean image. 0 = off.
+    #[arg(long, default_value_t = 0.0)]
+    augment_dropout: f64,
+    /// Robustness training: half the samples get a random fraction (up to this) of the empty
+    /// voxels inside the object's box switched on. 0 = off.
+    #[arg(long, default_value_t = 0.0)]
+    augment_salt: f64,
 }
 
 /// Runs training, drawing a progress bar with loss and images/s.
@@ -83,6 +91,7 @@ pub fn run(a: TrainArgs) -> Result<()> {
         eval_every: a.eval_every.max(1),
         eval_samples: a.eval_samples,
         window: a.crop,
+        augment: Augment { dropout: a.augment_dropout, salt: a.augment_salt },
     };
     let gpu = Gpu::new()?;
     let bar = ProgressBar::new(cfg.steps);

@@ -2,8 +2,8 @@
 
 use clap::Args;
 use rendernet::reference::camera::{self, RADIUS_AT_SCALE_ONE};
-use rendernet::reference::{Light, Options, Renderer, Shader, View};
-use rendernet::voxel::{self, Binvox, Family, Mesh, VoxelGrid, VoxelizeOptions};
+use rendernet::reference::{Light, Options, RayMarcher, Shader, View};
+use rendernet::voxel::{self, Family, VoxelGrid};
 use rendernet::{Error, Gpu, Result};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -19,7 +19,7 @@ pub struct SceneArgs {
     voxels: Option<PathBuf>,
     /// Grid side used to voxelise a mesh or a procedural --shape.
     #[arg(long, default_value_t = 64, allow_negative_numbers = true)]
-    resolution: usize,
+    pub resolution: usize,
     /// Procedural shape family instead of a file: chair, table, sofa or primitive.
     #[arg(long, value_parser = parse_family)]
     shape: Option<Family>,
@@ -146,11 +146,6 @@ fn voxel_err(e: voxel::VoxelError) -> Error {
     Error::Invalid(e.to_string())
 }
 
-/// `datasets/fixtures/bunny64.safetensors`, the default scene of `truth` and `render`: the
-/// bunny voxelised anti-aliased (`VoxelizeOptions::smooth(64)`, u8 occupancy), so its
-/// iso-surface is smooth rather than a binvox staircase.
-pub const BUNNY: &[u8] = include_bytes!("../../datasets/fixtures/bunny64.safetensors");
-
 /// Loads the grid the flags name, and says what it is.
 pub fn load(a: &SceneArgs) -> Result<(VoxelGrid, String)> {
     let Some(path) = &a.voxels else {
@@ -159,28 +154,9 @@ pub fn load(a: &SceneArgs) -> Result<(VoxelGrid, String)> {
             let what = format!("procedural {family:?} seed {} at {}^3", a.seed, a.resolution).to_lowercase();
             return Ok((grid, what));
         }
-        // The embedded default: the Stanford bunny (public domain, npm `bunny`) voxelised at
-        // 64^3, a shape no training set of ours contains.
-        let grid = voxel::safetensors_io::from_bytes(BUNNY, "embedded bunny64.safetensors").map_err(voxel_err)?;
-        return Ok((grid, "the embedded Stanford bunny at 64^3".into()));
+        return Ok((voxel::bunny(), "the embedded Stanford bunny at 64^3".into()));
     };
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    let grid = match ext.as_str() {
-        "binvox" => Binvox::read(path).map_err(voxel_err)?.grid,
-        "safetensors" => voxel::safetensors_io::read(path).map_err(voxel_err)?,
-        "vox" => voxel::vox::read(path).map_err(voxel_err)?,
-        "obj" | "off" | "ply" => {
-            let mesh = Mesh::load(path).map_err(voxel_err)?;
-            // Anti-aliased: binary occupancy renders as voxel stair-steps (rings, false creases).
-            voxel::voxelize(&mesh, &VoxelizeOptions::smooth(a.resolution)).map_err(voxel_err)?
-        }
-        _ => {
-            return Err(Error::Invalid(format!(
-                "{}: unknown extension; expected .binvox, .safetensors, .vox, .obj, .off or .ply",
-                path.display()
-            )));
-        }
-    };
+    let grid = voxel::load(path, a.resolution).map_err(voxel_err)?;
     let d = grid.dims();
     Ok((grid, format!("{} ({}x{}x{})", display(path), d[0], d[1], d[2])))
 }
@@ -203,7 +179,7 @@ pub fn run(a: TruthArgs) -> Result<()> {
     let (grid, what) = load(&a.scene)?;
     let gpu = Gpu::new()?;
     let (view, light) = (a.scene.view(), a.scene.light());
-    let renderer = Renderer::new(&gpu).with_options(Options { supersample: a.supersample, ..Options::default() });
+    let renderer = RayMarcher::new(&gpu).with_options(Options { supersample: a.supersample, ..Options::default() });
     let t1 = Instant::now();
     let img = renderer.render(&gpu, &grid, &view, &light, a.shader, a.size)?;
     let render_s = t1.elapsed().as_secs_f64();

@@ -14,7 +14,7 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::gpu::{Gpu, Tensor};
-use crate::reference::{GpuGrid, Light, Options, Renderer, Shader, View};
+use crate::reference::{GpuGrid, Light, Options, RayMarcher, Shader, View};
 use crate::rng::SplitMix64;
 use crate::voxel::{Family, Mesh, VoxelGrid, VoxelizeOptions, voxelize};
 use safetensors::{Dtype, tensor::TensorView};
@@ -218,7 +218,7 @@ fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<()> {
 /// The generator's state while it runs.
 struct Writer<'a> {
     gpu: &'a Gpu,
-    renderer: Renderer,
+    renderer: RayMarcher,
     meshes: Vec<PathBuf>,
     o: &'a GenerateOptions,
     dir: &'a Path,
@@ -413,7 +413,7 @@ pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path, mut progress: impl F
     }
     let n_test = ((o.test_fraction * o.count as f64).ceil() as usize).min(o.count);
     let n_train = o.count - n_test;
-    let renderer = Renderer::new(gpu).with_options(Options {
+    let renderer = RayMarcher::new(gpu).with_options(Options {
         supersample: o.supersample,
         ..Options::default()
     });

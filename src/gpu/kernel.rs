@@ -10,13 +10,58 @@ use wgpu::util::DeviceExt;
 /// The WebGPU limit on workgroups per dispatch dimension.
 pub const MAX_WORKGROUPS_PER_DIM: u32 = 65535;
 
-/// A WGSL source file, embedded at build time. `name` keys the caches.
+/// A WGSL module, embedded at build time (by the crate-private `wgsl!` macro). `name` keys
+/// the caches.
 #[derive(Clone, Copy, Debug)]
 pub struct Shader {
-    /// File stem, e.g. `"conv"` for `shaders/conv.wgsl`.
+    /// Module name, e.g. `"conv"` for `shaders/conv.wgsl`.
     pub name: &'static str,
-    /// The WGSL text.
+    /// The WGSL text: the files below, concatenated.
     pub source: &'static str,
+    /// The `shaders/` files it is made of, in order (read instead of `source` from the
+    /// folder `RENDERNET_SHADER_DIR` names, when set).
+    pub files: &'static [&'static str],
+}
+
+/// `wgsl!("conv")` is the [`Shader`] of `shaders/conv.wgsl`; `wgsl!("conv_tex": "conv_fast",
+/// "conv_tex")` one module made of several files, concatenated in order.
+macro_rules! wgsl {
+    ($name:literal) => {
+        $crate::gpu::Shader {
+            name: $name,
+            source: include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/", $name, ".wgsl")),
+            files: &[concat!($name, ".wgsl")],
+        }
+    };
+    ($name:literal: $($file:literal),+) => {
+        $crate::gpu::Shader {
+            name: $name,
+            source: concat!($(include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/", $file, ".wgsl"))),+),
+            files: &[$(concat!($file, ".wgsl")),+],
+        }
+    };
+}
+pub(crate) use wgsl;
+
+/// The environment variable naming a folder whose `.wgsl` files replace the embedded ones:
+/// edit a shader and rerun without rebuilding (ci/mutants.sh tests mutated shaders so).
+pub const SHADER_DIR_ENV: &str = "RENDERNET_SHADER_DIR";
+
+/// The WGSL text of `shader`: embedded, or read from [`SHADER_DIR_ENV`]'s folder. A file
+/// that cannot be read there is reported and the embedded text used.
+fn source_of(shader: Shader) -> std::borrow::Cow<'static, str> {
+    let Some(dir) = std::env::var_os(SHADER_DIR_ENV) else { return shader.source.into() };
+    let mut text = String::new();
+    for f in shader.files {
+        match std::fs::read_to_string(std::path::Path::new(&dir).join(f)) {
+            Ok(t) => text.push_str(&t),
+            Err(e) => {
+                eprintln!("rendernet: {SHADER_DIR_ENV}: {}: {e}; using the embedded {f}", std::path::Path::new(&dir).join(f).display());
+                return shader.source.into();
+            }
+        }
+    }
+    text.into()
 }
 
 /// One storage binding of a dispatch, in binding order starting at 1.
@@ -95,7 +140,7 @@ impl Gpu {
                 .or_insert_with(|| {
                     self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
                         label: Some(shader.name),
-                        source: wgpu::ShaderSource::Wgsl(shader.source.into()),
+                        source: wgpu::ShaderSource::Wgsl(source_of(shader)),
                     })
                 })
                 .clone()

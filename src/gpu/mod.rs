@@ -7,7 +7,8 @@ mod kernel;
 mod pool;
 mod tensor;
 
-pub use kernel::{Arg, Shader, grid_1d, MAX_WORKGROUPS_PER_DIM};
+pub use kernel::{Arg, Shader, grid_1d, MAX_WORKGROUPS_PER_DIM, SHADER_DIR_ENV};
+pub(crate) use kernel::wgsl;
 pub use pool::BufferPool;
 pub use tensor::Tensor;
 pub(crate) use tensor::read_staging;

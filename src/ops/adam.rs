@@ -8,9 +8,9 @@
 
 use super::expect_shape;
 use crate::error::{Error, Result};
-use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
-const SHADER: Shader = Shader { name: "adam", source: include_str!("../../shaders/adam.wgsl") };
+const SHADER: Shader = wgsl!("adam");
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

@@ -5,9 +5,9 @@
 
 use super::{elementwise, expect_shape};
 use crate::error::Result;
-use crate::gpu::{Arg, Gpu, Shader, Tensor};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, wgsl};
 
-const SHADER: Shader = Shader { name: "add", source: include_str!("../../shaders/add.wgsl") };
+const SHADER: Shader = wgsl!("add");
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

@@ -7,9 +7,9 @@
 
 use super::{conv_fast, expect_rank, expect_shape};
 use crate::error::{Result, shape_err};
-use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
-const SHADER: Shader = Shader { name: "conv", source: include_str!("../../shaders/conv.wgsl") };
+const SHADER: Shader = wgsl!("conv");
 
 /// Which kernels a conv, transposed-conv or projection call runs. Pass `Auto` (the
 /// `Default`, what the graph executor uses): the tiled kernels, reading textures or buffers

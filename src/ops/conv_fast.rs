@@ -5,14 +5,11 @@
 
 use super::conv::{Geometry, Params};
 use crate::error::Result;
-use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
-const SHADER: Shader = Shader { name: "conv_fast", source: include_str!("../../shaders/conv_fast.wgsl") };
+const SHADER: Shader = wgsl!("conv_fast");
 /// The texture family: `conv_tex.wgsl` uses `conv_fast.wgsl`'s parameters and helpers.
-const TEX_SHADER: Shader = Shader {
-    name: "conv_tex",
-    source: concat!(include_str!("../../shaders/conv_fast.wgsl"), include_str!("../../shaders/conv_tex.wgsl")),
-};
+const TEX_SHADER: Shader = wgsl!("conv_tex": "conv_fast", "conv_tex");
 
 /// The tiled kernels' parameters for dispatch geometry `g` with `cpad` packed channels.
 fn params(g: &Geometry, cpad: usize) -> Params {

@@ -3,9 +3,9 @@
 
 use super::elementwise;
 use crate::error::{Error, Result};
-use crate::gpu::{Arg, Gpu, Shader, Tensor};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, wgsl};
 
-const SHADER: Shader = Shader { name: "dropout", source: include_str!("../../shaders/dropout.wgsl") };
+const SHADER: Shader = wgsl!("dropout");
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

@@ -3,9 +3,9 @@
 
 use super::elementwise;
 use crate::error::Result;
-use crate::gpu::{Arg, Gpu, Shader, Tensor};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, wgsl};
 
-const SHADER: Shader = Shader { name: "elu", source: include_str!("../../shaders/elu.wgsl") };
+const SHADER: Shader = wgsl!("elu");
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

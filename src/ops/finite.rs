@@ -2,9 +2,9 @@
 //! optimizer can skip a poisoned step on the GPU, inside the step's single submit.
 
 use crate::error::{Result, shape_err};
-use crate::gpu::{Arg, Gpu, Shader, Tensor};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, wgsl};
 
-const SHADER: Shader = Shader { name: "finite", source: include_str!("../../shaders/finite.wgsl") };
+const SHADER: Shader = wgsl!("finite");
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

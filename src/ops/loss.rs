@@ -13,9 +13,9 @@
 
 use super::{elementwise, expect_shape, reduce};
 use crate::error::{Result, shape_err};
-use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
-const SHADER: Shader = Shader { name: "loss", source: include_str!("../../shaders/loss.wgsl") };
+const SHADER: Shader = wgsl!("loss");
 
 /// The clamp BCE applies to predictions, in f32 (`1 - BCE_EPS` rounds to 0.99999988).
 pub const BCE_EPS: f32 = 1e-7;

@@ -15,9 +15,9 @@
 
 use super::{expect_rank, expect_shape, reduce};
 use crate::error::{Error, Result, shape_err};
-use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
-const SHADER: Shader = Shader { name: "phong", source: include_str!("../../shaders/phong.wgsl") };
+const SHADER: Shader = wgsl!("phong");
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

@@ -3,9 +3,9 @@
 
 use super::{expect_shape, reduce};
 use crate::error::{Result, shape_err};
-use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
-const SHADER: Shader = Shader { name: "prelu", source: include_str!("../../shaders/prelu.wgsl") };
+const SHADER: Shader = wgsl!("prelu");
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

@@ -2,15 +2,16 @@
 //! `shaders/projection.wgsl`). The camera-aligned grid `[N, C, D, H, W]` is read as
 //! `[N, C*D, H, W]` (channel `c*D + d`, a free view), then mixed by weights `[O, C*D, 1, 1]`
 //! (PyTorch's 1x1 conv layout) and bias `[O]` into `[N, O, H, W]`. PReLU follows as its own op.
-//! Wide layers (the real ones: K = 512..1024) run the tiled conv kernels as a matmul (the
-//! choice is `conv`'s `Auto` table); `shaders/projection.wgsl` serves the narrow ones.
+//! The network runs the tiled conv kernels as a matmul (`ConvKernel::Auto`);
+//! `shaders/projection.wgsl`, one invocation per output, is `ConvKernel::Reference`: the
+//! oracle the tiled kernels are compared with, and `bench --kernel reference`.
 
 use super::conv::{self, ConvKernel, Geometry, Pass};
 use super::{expect_shape, reduce};
 use crate::error::{Result, shape_err};
-use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
-const SHADER: Shader = Shader { name: "projection", source: include_str!("../../shaders/projection.wgsl") };
+const SHADER: Shader = wgsl!("projection");
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

@@ -3,9 +3,9 @@
 //! gradient of its own to register (a sum's backward is a broadcast, done by its callers).
 
 use crate::error::{Result, shape_err};
-use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
-const SHADER: Shader = Shader { name: "reduce", source: include_str!("../../shaders/reduce.wgsl") };
+const SHADER: Shader = wgsl!("reduce");
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

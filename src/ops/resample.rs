@@ -26,9 +26,9 @@
 
 use super::{expect_rank, expect_shape, reduce};
 use crate::error::{Result, shape_err};
-use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
-const SHADER: Shader = Shader { name: "resample", source: include_str!("../../shaders/resample.wgsl") };
+const SHADER: Shader = wgsl!("resample");
 
 /// Values per pose: scale, azimuth, elevation, translation (d, h, w).
 pub const POSE_LEN: usize = 6;

@@ -2,9 +2,9 @@
 
 use super::elementwise;
 use crate::error::Result;
-use crate::gpu::{Arg, Gpu, Shader, Tensor};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, wgsl};
 
-const SHADER: Shader = Shader { name: "sigmoid", source: include_str!("../../shaders/sigmoid.wgsl") };
+const SHADER: Shader = wgsl!("sigmoid");
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

@@ -25,9 +25,9 @@ use crate::gpu::{self, Arg, Gpu, Tensor};
 use crate::voxel::VoxelGrid;
 
 const MARCH: gpu::Shader =
-    gpu::Shader { name: "reference_march", source: include_str!("../../shaders/reference_march.wgsl") };
+    gpu::wgsl!("reference_march");
 const SHADE: gpu::Shader =
-    gpu::Shader { name: "reference_shade", source: include_str!("../../shaders/reference_shade.wgsl") };
+    gpu::wgsl!("reference_shade");
 
 /// G-buffer channels written by the march pass.
 const GBUF_CHANNELS: usize = 9;
@@ -186,21 +186,23 @@ struct ShadeParams {
     crease_step: i32,
 }
 
-/// The reference renderer. Holds only settings; pipelines live in the [`Gpu`]'s cache.
+/// The reference (conventional, not learned) renderer: marches rays through the grid's
+/// 0.5 iso-surface and shades the hits. Holds only settings; pipelines live in the
+/// [`Gpu`]'s cache. The learned renderer is [`crate::nn::render::Renderer`].
 #[derive(Clone, Debug, Default)]
-pub struct Renderer {
+pub struct RayMarcher {
     /// Quality settings used by every render.
     pub options: Options,
 }
 
-impl Renderer {
+impl RayMarcher {
     /// A renderer with default [`Options`] (one ray per pixel).
-    pub fn new(_gpu: &Gpu) -> Renderer {
-        Renderer { options: Options::default() }
+    pub fn new(_gpu: &Gpu) -> RayMarcher {
+        RayMarcher { options: Options::default() }
     }
 
     /// The same renderer with other options.
-    pub fn with_options(mut self, options: Options) -> Renderer {
+    pub fn with_options(mut self, options: Options) -> RayMarcher {
         self.options = options;
         self
     }
@@ -233,7 +235,7 @@ impl Renderer {
         self.record_many(gpu, pass, grid, view, light, &[(shader, out)])
     }
 
-    /// Like [`Renderer::record`] for several shaders of one view: the G-buffer is marched once
+    /// Like [`RayMarcher::record`] for several shaders of one view: the G-buffer is marched once
     /// and shaded per output, so e.g. Phong, normal, albedo and mask cost one march, not four.
     /// Every output must have the same size `S`.
     #[allow(clippy::too_many_arguments)]

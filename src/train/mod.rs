@@ -46,6 +46,48 @@ pub struct TrainConfig {
     pub eval_samples: usize,
     /// A fixed camera-grid window instead of the growing schedule (fine-tuning).
     pub window: Option<usize>,
+    /// Corruptions applied to input grids (targets stay clean).
+    pub augment: Augment,
+}
+
+/// Input-grid corruptions for robustness training: the network sees a damaged grid and is
+/// asked for the clean scene's image. Each sample is corrupted with probability 1/2 (so the
+/// clean case keeps its share), and then at a level drawn uniformly in `[0, max]` for each
+/// corruption whose `max` is non-zero. All zero (the default) trains on clean grids only.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Augment {
+    /// Largest fraction of occupied voxels removed ([`crate::stress::dropout`]).
+    pub dropout: f64,
+    /// Largest fraction of empty voxels in the object's box switched on ([`crate::stress::salt`]).
+    pub salt: f64,
+}
+
+impl Augment {
+    /// Checks the levels: each a fraction in `[0, 1]`.
+    pub fn validate(&self) -> Result<()> {
+        for (name, v) in [("--augment-dropout", self.dropout), ("--augment-salt", self.salt)] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(Error::Invalid(format!("{name} {v}: must be a fraction in 0..=1")));
+            }
+        }
+        Ok(())
+    }
+
+    /// `grid`, corrupted or not as drawn from `r`.
+    pub fn apply(&self, grid: &crate::voxel::VoxelGrid, r: &mut SplitMix64) -> crate::voxel::VoxelGrid {
+        let (coin, seed) = (r.next_u64(), r.next_u64());
+        let mut g = grid.clone();
+        if *self == Augment::default() || coin % 2 == 0 {
+            return g;
+        }
+        if self.dropout > 0.0 {
+            g = crate::stress::dropout(&g, self.dropout * r.next_f64(), seed);
+        }
+        if self.salt > 0.0 {
+            g = crate::stress::salt(&g, self.salt * r.next_f64(), seed ^ 1);
+        }
+        g
+    }
 }
 
 /// Reported to the caller (the CLI draws a progress bar from it).
@@ -117,7 +159,7 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
     }
     let mut cur = crop_phase(gpu, cfg, head, window(start), resume)?;
     let names: Vec<String> = cur.net.targets.iter().map(|(n, _)| n.clone()).collect();
-    let mut rng = SplitMix64(cfg.seed ^ 0x5EED ^ start.wrapping_mul(0x2545F4914F6CDD1D));
+    cfg.augment.validate()?;
     // The curve lives in <out>.log.csv (step,loss,psnr), appended every evaluation and read
     // back on resume, so the PNG covers the whole run across interruptions.
     let log = cfg.out.with_extension("log.csv");
@@ -130,12 +172,16 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
             cur.ex.save_checkpoint(gpu, &cfg.out)?;
             cur = crop_phase(gpu, cfg, head, w, Some(&cfg.out))?;
         }
+        // Samples, crops and corruptions of a step depend on (seed, step) only, so a resumed
+        // run draws exactly what the uninterrupted one would have.
+        let mut rng = SplitMix64::new(cfg.seed ^ 0x5EED, step);
         let mut b = Batch::default();
         for _ in 0..cfg.batch {
             let i = (rng.next_u64() % train.len() as u64) as usize;
-            let sample = train.get(i)?;
+            let mut sample = train.get(i)?;
             let r = [rng.next_u64(), rng.next_u64(), rng.next_u64()];
             let (h0, w0) = batch::window_origin(p, &sample, w, r);
+            sample.grid = cfg.augment.apply(&sample.grid, &mut rng);
             b.push(p, &sample, [h0, w0, w, w], &names)?;
         }
         feed(gpu, &cur, &b)?;

@@ -1,6 +1,7 @@
 //! Voxel grids and the shapes that fill them: file formats (binvox, safetensors, MagicaVoxel
 //! `.vox`), triangle mesh
-//! loading (OBJ, OFF, PLY), a solid voxeliser and a procedural shape generator.
+//! loading (OBJ, OFF, PLY), a solid voxeliser and a procedural shape generator. [`load`]
+//! reads any of them by extension.
 //!
 //! # Axis convention
 //! A [`VoxelGrid`] is indexed `[d, h, w]` (row-major, `w` fastest). Everything in this module maps
@@ -10,6 +11,7 @@
 //! returns, i.e. `data[x][y][z]`; see [`binvox`] for how that relates to the file's byte order.
 
 pub mod binvox;
+mod load;
 pub mod mesh;
 pub mod ply;
 pub mod safetensors_io;
@@ -18,6 +20,7 @@ pub mod vox;
 pub mod voxelize;
 
 pub use binvox::Binvox;
+pub use load::{BUNNY64, bunny, load};
 pub use mesh::Mesh;
 pub use shapes::{Family, Shape};
 pub use voxelize::{VoxelizeOptions, voxelize};
