@@ -156,8 +156,19 @@ fn add_forward_backward_and_accumulate() {
     assert_close("add forward", &download(&ty), &sum, 1e-6, 1e-6);
     let acc: Vec<f64> = a.iter().zip(&b).map(|(x, y)| 2.0 * x + y).collect();
     assert_close("add accumulate", &download(&tb), &acc, 1e-6, 1e-6);
-    // The backward is the identity for both inputs (no kernel): check the maths it relies on.
-    let r = rng.vec(n, -1.0, 1.0);
-    let add_ref = |x: &[f64]| x.iter().zip(&b).map(|(p, q)| p + q).collect::<Vec<_>>();
-    assert_close("add backward", &r, &fd_grad(&a, |x| dot(&r, &add_ref(x))), 1e-8, 1e-6);
+    // Backward: the executor routes dy to each input with `copy` (that input's first
+    // gradient) or `accumulate` (a later one, when a value feeds several nodes). On the GPU,
+    // both must give the finite-difference gradient of dot(r, a + b).
+    let (r, prior) = (f32_round(&rng.vec(n, -1.0, 1.0)), f32_round(&rng.vec(n, -1.0, 1.0)));
+    let (tr, tga, tgb) = (upload(&shape, &r), zeros(&shape), upload(&shape, &prior));
+    run(|p| {
+        add::copy(gpu(), p, &tr, &tga)?;
+        add::accumulate(gpu(), p, &tr, &tgb)
+    });
+    let add_ref = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p + q).collect::<Vec<_>>();
+    let da = fd_grad(&a, |x| dot(&r, &add_ref(x, &b)));
+    let db = fd_grad(&b, |y| dot(&r, &add_ref(&a, y)));
+    assert_close("add backward to a (copy)", &download(&tga), &da, 1e-6, 1e-5);
+    let want_b: Vec<f64> = prior.iter().zip(&db).map(|(p, d)| p + d).collect();
+    assert_close("add backward to b (accumulated onto an earlier gradient)", &download(&tgb), &want_b, 1e-6, 1e-5);
 }

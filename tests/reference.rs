@@ -131,6 +131,15 @@ fn sphere_mask_matches_the_analytic_disk() {
     let iou = inter as f64 / union as f64;
     eprintln!("sphere mask IoU {iou:.4}");
     assert!(iou > 0.98, "IoU {iou}");
+    // Supersampled 3x3, the mask is the pixel's coverage: in [0, 1], and summed over the
+    // image it is the disk's area in pixels.
+    let ss = RayMarcher::new(gpu()).with_options(Options { supersample: 3, ..Options::default() });
+    let img = ss.render(gpu(), &sphere_grid(), &sphere_view(), &Light::default(), Shader::Mask, S).unwrap();
+    assert!(img.data.iter().all(|v| (0.0..=1.0).contains(v)), "coverage outside [0, 1]");
+    let r = disk_coords(0, 0).2;
+    let (area, want) = (img.data.iter().map(|&v| v as f64).sum::<f64>(), std::f64::consts::PI * r * r);
+    eprintln!("supersampled coverage {area:.1} px, disk area {want:.1} px");
+    assert!((area - want).abs() < 0.01 * want, "coverage {area} px against the disk's {want} px");
 }
 
 #[test]
