@@ -27,11 +27,20 @@ const SANS: &str = "sans-serif";
 
 /// Okabe-Ito colours (black and yellow left out: black is the axes' colour, yellow is
 /// unreadable on white), in the order series get them.
-const PALETTE: [RGBColor; 6] =
-    [RGBColor(0, 114, 178), RGBColor(213, 94, 0), RGBColor(0, 158, 115), RGBColor(204, 121, 167), RGBColor(230, 159, 0), RGBColor(86, 180, 233)];
+/// Okabe-Ito, colour-blind safe (its yellow darkened to read on white).
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(0, 114, 178),
+    RGBColor(213, 94, 0),
+    RGBColor(0, 158, 115),
+    RGBColor(204, 121, 167),
+    RGBColor(230, 159, 0),
+    RGBColor(86, 180, 233),
+    RGBColor(0, 0, 0),
+    RGBColor(190, 175, 20),
+];
 const GRID: RGBColor = RGBColor(228, 228, 228);
 
-/// The colour of the `i`-th series (cycling through six).
+/// The colour of the `i`-th series (cycling through eight).
 pub fn colour(i: usize) -> [u8; 3] {
     let RGBColor(r, g, b) = PALETTE[i % PALETTE.len()];
     [r, g, b]
@@ -319,13 +328,16 @@ where
     let x = x_extent(p);
     let cats = &o.x_categories;
     let longest_label = cats.iter().map(|c| c.chars().count()).max().unwrap_or(0);
+    // Category names that would overlap side by side (about 7 px a character) stand upright.
+    let upright = cats.iter().map(|c| c.chars().count() + 2).sum::<usize>() * 7 > area.dim_in_pixel().0 as usize - 110;
+    let label_area = if upright { 36 + 7 * longest_label as u32 } else { 52 };
     let mut chart = ChartBuilder::on(area)
         .caption(p.title, (SANS, 20))
         .margin_top(8)
         .margin_left(10)
         .margin_right(24)
         .margin_bottom(6)
-        .x_label_area_size(52)
+        .x_label_area_size(label_area)
         .y_label_area_size(76)
         .build_cartesian_2d(x.clone(), y_spec)?;
     let x_fmt = |v: &f64| {
@@ -333,7 +345,13 @@ where
             return format_number(*v);
         }
         let i = v.round();
-        if (v - i).abs() > 1e-6 || i < 0.0 { String::new() } else { cats.get(i as usize).cloned().unwrap_or_default() }
+        if (v - i).abs() > 1e-6 || i < 0.0 {
+            return String::new();
+        }
+        let c = cats.get(i as usize).cloned().unwrap_or_default();
+        // Upright labels are centred on their tick: leading spaces (narrower than letters,
+        // hence twice as many) push the name below the axis.
+        if upright { format!("{}{c}", " ".repeat(2 * c.chars().count() + 2)) } else { c }
     };
     // No numbers in the band of capped values: nothing there has its height.
     let y_fmt = |v: &f64| if band.is_some_and(|(b, _)| *v > b) { String::new() } else { format_number(*v) };
@@ -351,6 +369,10 @@ where
         mesh.x_labels(10);
     } else {
         mesh.x_labels(cats.len());
+    }
+    let rotated = (SANS, 12).into_font().transform(FontTransform::Rotate90);
+    if upright {
+        mesh.x_label_style(rotated);
     }
     mesh.draw()?;
     let top = band.map(|b| b.1);
