@@ -56,6 +56,7 @@ fn dataset_train_resume_and_eval_from_the_command_line() {
     for f in [ckpt.clone(), ckpt.with_extension("weights.safetensors"), ckpt.with_extension("curve.png")] {
         assert!(f.exists(), "{} missing", f.display());
     }
+    let after_two = tensors_of(&ckpt.with_extension("weights.safetensors"));
     let out = rendernet(&[&["train", "--steps", "4", "--resume", c, "--out", c][..], &common[..]].concat());
     assert!(out.contains("final held-out PSNR"), "{out}");
     // The log spans the interruption: losses of steps 1..=4 and evaluations at 2 and 4.
@@ -65,22 +66,32 @@ fn dataset_train_resume_and_eval_from_the_command_line() {
     assert!(log.contains("\n2,,") && log.contains("\n4,,"), "{log}");
     let straight = dir.join("straight.ckpt");
     rendernet(&[&["train", "--steps", "4", "--out", straight.to_str().unwrap()][..], &common[..]].concat());
-    let tensors = |p: std::path::PathBuf| {
-        let bytes = std::fs::read(&p).unwrap();
-        let st = safetensors::SafeTensors::deserialize(&bytes).unwrap();
-        let mut v: Vec<(String, Vec<u8>)> = st.tensors().into_iter().map(|(n, t)| (n, t.data().to_vec())).collect();
-        v.sort();
-        v
-    };
-    let (resumed, uninterrupted) = (tensors(ckpt.with_extension("weights.safetensors")), tensors(straight.with_extension("weights.safetensors")));
+    let (resumed, uninterrupted) = (tensors_of(&ckpt.with_extension("weights.safetensors")), tensors_of(&straight.with_extension("weights.safetensors")));
     assert_eq!(resumed.len(), uninterrupted.len());
+    let moved = resumed.iter().zip(&after_two).filter(|(a, b)| a.1 != b.1).count();
+    assert!(moved * 2 > resumed.len(), "steps 3-4 changed only {moved} of {} tensors", resumed.len());
     for ((n, a), (_, b)) in resumed.iter().zip(&uninterrupted) {
         assert!(a == b, "{n}: the resumed run's weights differ from the uninterrupted run's");
     }
     let w = ckpt.with_extension("weights.safetensors");
     let out = rendernet(&["eval", "--weights", w.to_str().unwrap(), "--data", d, "--json"]);
-    assert!(out.contains("\"psnr_mean\"") && out.contains("\"per_shape\""), "{out}");
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("eval --json: {e}\n{out}"));
+    let n = j["per_shape"].as_object().map_or(0, |o| o.len());
+    assert!(n > 0, "{out}");
+    for key in ["psnr_mean", "object_psnr_mean", "ssim_mean", "black_image_psnr"] {
+        let v = j[key].as_f64().unwrap_or(f64::NAN);
+        assert!(v.is_finite() && v > 0.0, "{key} = {v} in {out}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Name -> raw bytes of every tensor of a safetensors file, sorted by name.
+fn tensors_of(p: &std::path::Path) -> Vec<(String, Vec<u8>)> {
+    let bytes = std::fs::read(p).unwrap();
+    let st = safetensors::SafeTensors::deserialize(&bytes).unwrap();
+    let mut v: Vec<(String, Vec<u8>)> = st.tensors().into_iter().map(|(n, t)| (n, t.data().to_vec())).collect();
+    v.sort();
+    v
 }
 
 /// The shipped weights on a shape no training set contains (the Stanford bunny, a real

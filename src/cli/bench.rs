@@ -207,10 +207,10 @@ fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine) -> Result<Vec<(String, serd
         let mut json = m.row("rendernet", &shape, pass, "auto", ms, gflops);
         json["dispatches"] = stats.dispatches.into();
         json["submits_per_step"] = stats.submits.into();
-        json["peak_bytes"] = stats.pool_bytes.into();
+        json["pool_bytes"] = stats.pool_bytes.into();
         json["tensor_bytes"] = stats.tensor_bytes.into();
         let text = format!(
-            "{:<17} {:<34} {:<16} {:<9} {ms:>10.1} {gflops:>9.2} {:>8.1}%  ({} dispatches, {} submit, peak {:.1} MiB of {:.1} MiB tensors)",
+            "{:<17} {:<34} {:<16} {:<9} {ms:>10.1} {gflops:>9.2} {:>8.1}%  ({} dispatches, {} submit, pool {:.1} MiB for {:.1} MiB of tensors)",
             "rendernet", shape, pass, "auto", 100.0 * gflops / m.ceiling, stats.dispatches, stats.submits,
             stats.pool_bytes as f64 / 1048576.0, stats.tensor_bytes as f64 / 1048576.0
         );
