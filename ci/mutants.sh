@@ -5,7 +5,7 @@
 # - Shader mutants are applied to a copy of shaders/ that RENDERNET_SHADER_DIR points at, so
 #   they need no rebuild: all of them run every time.
 # - Rust mutants edit the file in place and rebuild. MUTANTS_RUST=all (default) runs every
-#   one; =rotate runs one a day, in turn (CI: each is run within a few days); =none skips them.
+#   one (CI does); =rotate runs one a day, in turn; =none skips them.
 # Usage: bash ci/mutants.sh [mutants file]. Every edited file is restored, even on Ctrl-C.
 set -uo pipefail
 cd "$(dirname "$0")/.."
