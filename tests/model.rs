@@ -179,3 +179,25 @@ fn grids_past_the_device_limits_run_or_fail_clearly() {
     let opts = reference::Options { supersample: 1, ..reference::Options::default() };
     check("reference", reference::RayMarcher::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, 64));
 }
+
+/// A network trained on another shader's dataset (ambient occlusion: one image head, no
+/// light) renders through `render --shader ao --weights`, with the reference's AO beside it;
+/// without --weights, `--shader ao` is refused by name (only Phong weights are shipped).
+#[test]
+fn weights_of_another_shader_render_with_its_head() {
+    let dir = std::env::temp_dir().join(format!("rendernet-ao-test-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let (data, ckpt, png) = (dir.join("data"), dir.join("ao.ckpt"), dir.join("ao.png"));
+    let d = data.to_str().unwrap();
+    rendernet(&["dataset", "--shader", "ao", "--count", "2", "--views", "1", "--res", "16", "--image", "128", "--seed", "5", "--out", d]);
+    rendernet(&["train", "--data", d, "--out", ckpt.to_str().unwrap(), "--steps", "2", "--crop", "16", "--eval-samples", "1"]);
+    let w = ckpt.with_extension("weights.safetensors");
+    let out = rendernet(&["render", "--shader", "ao", "--weights", w.to_str().unwrap(), "--size", "64", "--compare", "--out", png.to_str().unwrap()]);
+    assert!(out.contains("object PSNR") && out.contains("mask IoU"), "{out}");
+    let img = image::open(&png).unwrap();
+    assert_eq!((img.width(), img.height()), (128, 64), "network and reference side by side");
+    let refused = Command::new(env!("CARGO_BIN_EXE_rendernet")).args(["render", "--shader", "ao", "--out", png.to_str().unwrap()]).output().unwrap();
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success() && err.contains("--shader ao") && err.contains("--weights"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

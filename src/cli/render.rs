@@ -16,6 +16,11 @@ pub struct RenderArgs {
     scene: SceneArgs,
     #[command(flatten)]
     net: super::weights::WeightsArgs,
+    /// The shader the weights were trained for: phong (default; embedded weights) or, with
+    /// --weights from a dataset made with that --shader, albedo, normal, depth, mask, toon,
+    /// contour or ao. --compare renders the same shader with the reference.
+    #[arg(long, default_value = "phong", value_parser = super::truth::parse_shader)]
+    shader: Shader,
     /// Image side in pixels (a multiple of 8 for the tiny preset).
     #[arg(long, default_value_t = 128, allow_negative_numbers = true)]
     size: usize,
@@ -44,15 +49,15 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let (grid, what) = load(&a.scene)?;
     let gpu = Gpu::new()?;
     let preset = a.net.preset()?;
-    let (bytes, name) = a.net.load()?;
-    let mut net = Renderer::new(&gpu, preset, &bytes, &name, a.size)?.with_crop_margin((!a.no_crop).then_some(a.crop_margin));
+    let (bytes, name) = a.net.load_for(a.shader)?;
+    let mut net = Renderer::for_shader(&gpu, preset, a.shader, &bytes, &name, a.size)?.with_crop_margin((!a.no_crop).then_some(a.crop_margin));
     let (view, light) = (a.scene.view(), a.scene.light());
     let t1 = Instant::now();
     let img = net.render(&gpu, &grid, &view, &light)?;
     let render_s = t1.elapsed().as_secs_f64();
     if a.compare {
         let opts = Options { supersample: 2, ..Options::default() };
-        let truth = reference::RayMarcher::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, a.size as u32)?;
+        let truth = reference::RayMarcher::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, a.shader, a.size as u32)?;
         println!("against the reference renderer: {}", compare_line(&Scores::of(&img, &truth), &Scores::black_floor(&truth)));
         save_pair(&img, &truth, &a.out)?;
     } else {

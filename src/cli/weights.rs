@@ -4,6 +4,7 @@
 use clap::Args;
 use rendernet::nn::render::TINY_PHONG_WEIGHTS;
 use rendernet::nn::rendernet::Preset;
+use rendernet::reference::Shader;
 use rendernet::{Error, Result};
 use std::path::PathBuf;
 
@@ -26,11 +27,22 @@ impl WeightsArgs {
         Preset::by_name(&self.preset)
     }
 
-    /// The weights' bytes and a name for messages.
+    /// The weights' bytes and a name for messages (Phong weights).
     pub fn load(&self) -> Result<(Vec<u8>, String)> {
-        match &self.weights {
-            Some(p) => Ok((std::fs::read(p).map_err(|e| Error::Io { path: p.display().to_string(), source: e })?, p.display().to_string())),
-            None => Ok((TINY_PHONG_WEIGHTS.to_vec(), "embedded tiny-phong weights".to_string())),
+        self.load_for(Shader::Phong)
+    }
+
+    /// The weights' bytes and a name for messages, for a network trained on `shader`: the
+    /// file given, or the embedded weights of that shader where some are shipped.
+    pub fn load_for(&self, shader: Shader) -> Result<(Vec<u8>, String)> {
+        match (&self.weights, shader) {
+            (Some(p), _) => Ok((std::fs::read(p).map_err(|e| Error::Io { path: p.display().to_string(), source: e })?, p.display().to_string())),
+            (None, Shader::Phong) => Ok((TINY_PHONG_WEIGHTS.to_vec(), "embedded tiny-phong weights".to_string())),
+            (None, s) => Err(Error::Invalid(format!(
+                "--shader {}: no weights are shipped for it yet; pass --weights FILE (make one with \
+                 `rendernet dataset --shader {0} ...` then `rendernet train`)",
+                s.name()
+            ))),
         }
     }
 }

@@ -6,7 +6,7 @@ use super::rendernet::{Head, Preset, RenderNet, phong_of};
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::graph::Executor;
-use crate::reference::{Image, Light, View};
+use crate::reference::{Image, Light, Shader, View};
 use crate::voxel::VoxelGrid;
 
 /// The shipped weights: the tiny preset trained for Phong on procedural chairs, tables, sofas
@@ -16,6 +16,7 @@ pub const TINY_PHONG_WEIGHTS: &[u8] = include_bytes!("../../weights/tiny-phong.s
 /// A RenderNet ready to render, for one image size.
 pub struct Renderer {
     preset: Preset,
+    shader: Shader,
     weights: Vec<u8>,
     name: String,
     /// Networks built so far, by camera window `[h, w]` (one per window size).
@@ -38,11 +39,18 @@ impl Renderer {
     /// `2^(up stages + 2)`; the network is fully convolutional, so any such size works) and
     /// loads `weights` (safetensors bytes; `name` labels them in errors).
     pub fn new(gpu: &Gpu, preset: Preset, weights: &[u8], name: &str, size: usize) -> Result<Renderer> {
+        Renderer::for_shader(gpu, preset, Shader::Phong, weights, name, size)
+    }
+
+    /// [`Renderer::new`] for weights trained on another shader's images (a dataset made with
+    /// `--shader`): Phong has the normal/albedo/mask heads and takes the light; every other
+    /// shader is one image head of [`Shader::channels`] channels that ignores the light.
+    pub fn for_shader(gpu: &Gpu, preset: Preset, shader: Shader, weights: &[u8], name: &str, size: usize) -> Result<Renderer> {
         let f = preset.image_for(preset.cam) / preset.cam;
         if size == 0 || size % (4 * f) != 0 {
             return Err(Error::Invalid(format!("image size {size} must be a positive multiple of {}", 4 * f)));
         }
-        let mut r = Renderer { preset, weights: weights.to_vec(), name: name.to_string(), nets: Vec::new(), size, margin: Some(CROP_MARGIN) };
+        let mut r = Renderer { preset, shader, weights: weights.to_vec(), name: name.to_string(), nets: Vec::new(), size, margin: Some(CROP_MARGIN) };
         // Built now so bad weights fail here, not at the first render.
         let full = size / f;
         r.net_for(gpu, [full, full])?;
@@ -65,7 +73,11 @@ impl Renderer {
         if self.nets.len() == MAX_WINDOWS {
             self.nets.remove(1); // index 0 is the whole frame, built first
         }
-        let net = RenderNet::build(&self.preset, Head::Phong(phong_of(&Light::default())), 1, hw, false)?;
+        let head = match self.shader {
+            Shader::Phong => Head::Phong(phong_of(&Light::default())),
+            s => Head::Image(s.channels()),
+        };
+        let net = RenderNet::build(&self.preset, head, 1, hw, false)?;
         let mut ex = Executor::new(gpu, net.graph.clone(), 0)?;
         ex.load_params_bytes(gpu, &self.weights, &self.name)?;
         ex.training = false;
@@ -79,9 +91,15 @@ impl Renderer {
         self.size
     }
 
-    /// Renders `grid` (any size: resampled to the preset's input) from `view` under `light`.
-    /// Returns the RGB image `[3, size, size]`, clamped to [0, 1]; errors on a view or light
-    /// that [`View::validate`] or [`Light::validate`] rejects.
+    /// The shader the weights were trained for.
+    pub fn shader(&self) -> Shader {
+        self.shader
+    }
+
+    /// Renders `grid` (any size: resampled to the preset's input) from `view` under `light`
+    /// (ignored by shaders other than Phong). Returns the image `[C, size, size]` (C: the
+    /// shader's [`Shader::channels`]), clamped to [0, 1]; errors on a view or light that
+    /// [`View::validate`] or [`Light::validate`] rejects.
     pub fn render(&mut self, gpu: &Gpu, grid: &VoxelGrid, view: &View, light: &Light) -> Result<Image> {
         // Checked here, not left to the pose tensor's NaN guard, which can only name 'pose'.
         view.validate().map_err(|m| Error::Invalid(format!("render: view: {m}")))?;
@@ -98,14 +116,16 @@ impl Renderer {
         let (_, net, ex) = &mut self.nets[i];
         ex.feed(gpu, net.grid, &camera::input_values(&g))?;
         ex.feed(gpu, net.pose, &camera::pose_for_view(view, p.input, cam_hw, Some(win)))?;
-        let l = net.light.expect("the Phong head has a light input");
-        ex.feed(gpu, l, &camera::light_values(light))?;
+        if let Some(l) = net.light {
+            ex.feed(gpu, l, &camera::light_values(light))?;
+        }
         ex.forward(gpu)?;
         let part = ex.read(gpu, net.image)?;
-        // Pasted into a black frame: outside the window is empty space.
-        let (h, w) = (win[2] * f, win[3] * f);
-        let mut data = vec![0.0; 3 * self.size * self.size];
-        for c in 0..3 {
+        // Pasted into a frame of the shader's background: outside the window is empty space.
+        let (h, w, ch) = (win[2] * f, win[3] * f, self.shader.channels());
+        let background = if self.shader == Shader::Contour { 1.0 } else { 0.0 };
+        let mut data = vec![background; ch * self.size * self.size];
+        for c in 0..ch {
             for y in 0..h {
                 let dst = (c * self.size + win[0] * f + y) * self.size + win[1] * f;
                 let src = (c * h + y) * w;
@@ -114,7 +134,7 @@ impl Renderer {
                 }
             }
         }
-        Ok(Image { channels: 3, size: self.size, data })
+        Ok(Image { channels: ch, size: self.size, data })
     }
 }
 
