@@ -225,7 +225,7 @@ impl Inverter {
             }
         }
         rescored.sort_by(|a, b| b.0.total_cmp(&a.0));
-        let mut vars: Vec<Vars> = rescored.iter().take(o.keep).map(|s| s.1).collect();
+        let mut vars = with_twins(rescored.iter().map(|s| s.1), o.keep);
         let (best, curve) = self.refine(gpu, &gv, &win.crop_rgb(target), &mut vars, o, &mut progress, &win)?;
         // The estimate's picture and score: the whole frame, once.
         let full = Window::full(&self.preset, self.size);
@@ -305,6 +305,32 @@ impl Inverter {
         }
         Ok((best.expect("at least one start").1, curve))
     }
+}
+
+/// The `keep` starts to refine, from `ranked` (best silhouette first): each followed by its
+/// twin seen from the opposite side (azimuth + 180 degrees), unless a kept start is already
+/// within 30 degrees of it. A left-right symmetric object (most chairs) casts nearly the same
+/// silhouette from the front and from the back, so the silhouette score cannot tell them
+/// apart; the refinement's image loss (shading) can, if both are among its starts.
+fn with_twins(ranked: impl Iterator<Item = Vars>, keep: usize) -> Vec<Vars> {
+    let mut out: Vec<Vars> = Vec::new();
+    let near = |a: &Vars, b: &Vars| {
+        let (u, v) = (polar_unit(a.0[0], a.0[1]), polar_unit(b.0[0], b.0[1]));
+        u.iter().zip(&v).map(|(x, y)| x * y).sum::<f64>() > 30f64.to_radians().cos()
+    };
+    for v in ranked {
+        let mut twin = v;
+        twin.0[0] = (v.0[0] + 180.0) % 360.0;
+        for c in [v, twin] {
+            if out.len() < keep && !out.iter().any(|k| near(k, &c)) {
+                out.push(c);
+            }
+        }
+        if out.len() == keep {
+            break;
+        }
+    }
+    out
 }
 
 /// The part of the camera grid a search renders: the target's foreground box grown by
@@ -492,4 +518,23 @@ pub fn evaluate(
         progress(k + 1, n);
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn v(az: f64, el: f64) -> Vars {
+        Vars([az, el, 1.0, 30.0, 60.0])
+    }
+
+    /// The best start is followed by its opposite-side twin; near-duplicates (of a start or
+    /// of a twin) are skipped, so the kept starts cover distinct views.
+    #[test]
+    fn kept_starts_pair_each_view_with_its_opposite_side() {
+        let ranked = [v(30.0, 70.0), v(40.0, 70.0), v(210.0, 72.0), v(120.0, 90.0), v(300.0, 45.0)];
+        let kept: Vec<[f64; 2]> = with_twins(ranked.into_iter(), 4).iter().map(|k| [k.0[0], k.0[1]]).collect();
+        assert_eq!(kept, [[30.0, 70.0], [210.0, 70.0], [120.0, 90.0], [300.0, 90.0]]);
+        assert_eq!(with_twins(ranked.into_iter(), 1).len(), 1);
+    }
 }

@@ -371,3 +371,16 @@ fn curve_redraws_a_log_and_rejects_a_missing_one() {
     assert!(err.contains("--log") && err.contains("no such file"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A corruption level outside 0..=1 is refused by flag name before any data is read.
+#[test]
+fn train_rejects_an_augmentation_level_by_name() {
+    let dir = scratch("augment");
+    let out = rendernet()
+        .args(["train", "--data", "no-such-dataset", "--out", dir.join("x.ckpt").to_str().unwrap(), "--augment-dropout", "1.5"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--augment-dropout 1.5") && !err.contains("panicked"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -137,6 +137,7 @@ fn crop_phase(gpu: &Gpu, cfg: &TrainConfig, head: Head, window: usize, from: Opt
 /// Trains as configured, calling `report` after every step and evaluation. Returns the
 /// final held-out PSNR.
 pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> Result<f32> {
+    cfg.augment.validate()?;
     let ds = Dataset::open(&cfg.data)?;
     let train = ds.split(Split::Train);
     if train.is_empty() {
@@ -159,7 +160,6 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
     }
     let mut cur = crop_phase(gpu, cfg, head, window(start), resume)?;
     let names: Vec<String> = cur.net.targets.iter().map(|(n, _)| n.clone()).collect();
-    cfg.augment.validate()?;
     // The curve lives in <out>.log.csv (step,loss,psnr), appended every evaluation and read
     // back on resume, so the PNG covers the whole run across interruptions.
     let log = cfg.out.with_extension("log.csv");
