@@ -49,6 +49,10 @@ enum Cmd {
     /// versions of a scene through RenderNet and the reference renderer, each scored against
     /// the reference image of the clean scene; tables or JSON, and a contact sheet PNG.
     Stress(cli::stress::StressArgs),
+    /// Speed against accuracy: score each model (the shipped one and any --model) on a
+    /// dataset's held-out split, time its forward on this adapter beside the reference
+    /// renderer's, and chart object PSNR against forward milliseconds (PNG; table or JSON).
+    Frontier(cli::frontier::FrontierArgs),
     /// Time the conv, transposed-conv and projection kernels (reference and tiled) on shapes
     /// from the RenderNet presets: median ms and GFLOP/s per pass, GPU timestamps when the
     /// adapter has them.
@@ -79,6 +83,7 @@ fn main() -> ExitCode {
         Cmd::Bench(a) => cli::bench::run(a),
         Cmd::Invert(a) => cli::invert::run(a),
         Cmd::Stress(a) => cli::stress::run(a),
+        Cmd::Frontier(a) => cli::frontier::run(a),
         Cmd::EvalInvert(a) => cli::invert::run_eval(a),
     };
     match r {

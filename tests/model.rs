@@ -201,3 +201,31 @@ fn weights_of_another_shader_render_with_its_head() {
     assert!(!refused.status.success() && err.contains("--shader ao") && err.contains("--weights"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `frontier --json`: every model scored and timed beside the reference renderer's time and
+/// the same-run FMA ceiling, the chart written; a malformed --model is refused by name.
+#[test]
+fn frontier_scores_and_times_every_model() {
+    let dir = std::env::temp_dir().join(format!("rendernet-frontier-test-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let (data, w, png) = (dir.join("data"), dir.join("w.safetensors"), dir.join("f.png"));
+    rendernet(&["dataset", "--count", "2", "--views", "1", "--res", "16", "--image", "128", "--seed", "9", "--out", data.to_str().unwrap()]);
+    std::fs::write(&w, TINY_PHONG_WEIGHTS).unwrap();
+    let model = format!("copy=tiny:{}", w.display());
+    let out = rendernet(&["frontier", "--data", data.to_str().unwrap(), "--samples", "1", "--repeat", "1", "--model", &model, "--out", png.to_str().unwrap(), "--json"]);
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"));
+    let models = j["models"].as_array().unwrap();
+    assert_eq!(models.len(), 2, "{out}");
+    for m in models {
+        assert!(m["object_psnr"].as_f64().is_some_and(|v| v.is_finite() && v > 0.0), "{m}");
+        assert!(m["forward_ms"].as_f64().is_some_and(|v| v > 0.0), "{m}");
+    }
+    assert_eq!(models[0]["object_psnr"], models[1]["object_psnr"], "the same weights score the same");
+    assert!(j["reference"]["forward_ms"].as_f64().is_some_and(|v| v > 0.0) && j["fma_ceiling_gflops"].as_f64().is_some_and(|v| v > 0.0), "{out}");
+    assert!(png.exists());
+    let bad = Command::new(env!("CARGO_BIN_EXE_rendernet")).args(["frontier", "--data", data.to_str().unwrap(), "--model", "nano", "--out", png.to_str().unwrap()]).output().unwrap();
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && err.contains("--model nano") && err.contains("LABEL=PRESET:WEIGHTS"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod dataset;
 pub mod eval;
+pub mod frontier;
 pub mod info;
 pub mod invert;
 pub mod output;

@@ -10,7 +10,8 @@ use std::path::PathBuf;
 /// Train RenderNet on a dataset from `rendernet dataset`.
 #[derive(Args)]
 pub struct TrainArgs {
-    /// Network size: tiny (trains on a CPU through lavapipe) or paper (the appendix; real GPUs).
+    /// Network size: nano (fastest), tiny (the shipped one; both train on a CPU through lavapipe) or
+    /// paper (the appendix; real GPUs).
     #[arg(long, default_value = "tiny")]
     preset: String,
     /// Dataset directory (its manifest decides the shader: phong trains the normal, albedo and

@@ -66,11 +66,18 @@ pub struct EvalReport {
 /// Renders up to `limit` held-out samples (0 = all) with the weights at `weights` and
 /// compares them with the targets (the Phong image, or the single image).
 pub fn evaluate(gpu: &Gpu, p: &Preset, head: Head, weights: &Path, ds: &Dataset, limit: usize) -> Result<EvalReport> {
+    let bytes = std::fs::read(weights).map_err(|e| crate::error::Error::Io { path: weights.display().to_string(), source: e })?;
+    evaluate_bytes(gpu, p, head, &bytes, &weights.display().to_string(), ds, limit)
+}
+
+/// [`evaluate`] with the weights' safetensors bytes (`name` labels them in errors), e.g. the
+/// embedded ones.
+pub fn evaluate_bytes(gpu: &Gpu, p: &Preset, head: Head, weights: &[u8], name: &str, ds: &Dataset, limit: usize) -> Result<EvalReport> {
     let test = ds.split(Split::Test);
     let n = if limit == 0 { test.len() } else { limit.min(test.len()) };
     let net = RenderNet::build(p, head, 1, [p.cam, p.cam], false)?;
     let mut ex = Executor::new(gpu, net.graph.clone(), 0)?;
-    ex.load_params(gpu, weights)?;
+    ex.load_params_bytes(gpu, weights, name)?;
     ex.training = false;
     ex.keep(net.image);
     let target = match head {
