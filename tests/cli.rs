@@ -384,3 +384,17 @@ fn train_rejects_an_augmentation_level_by_name() {
     assert!(!out.status.success() && err.contains("--augment-dropout 1.5") && !err.contains("panicked"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Each shipped preset renders out of the box; a preset without shipped weights asks for
+/// --weights by name.
+#[test]
+fn render_uses_the_shipped_weights_of_the_preset() {
+    let dir = scratch("presets");
+    let png = dir.join("nano.png");
+    let out = run_ok(&["render", "--preset", "nano", "--size", "32", "--out", png.to_str().unwrap()]);
+    assert!(out.contains("embedded nano-phong weights") && png.exists(), "{out}");
+    let out = rendernet().args(["render", "--preset", "paper", "--out", png.to_str().unwrap()]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--preset paper") && err.contains("--weights"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

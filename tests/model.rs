@@ -216,12 +216,12 @@ fn frontier_scores_and_times_every_model() {
     let out = rendernet(&["frontier", "--data", data.to_str().unwrap(), "--samples", "1", "--repeat", "1", "--model", &model, "--out", png.to_str().unwrap(), "--json"]);
     let j: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"));
     let models = j["models"].as_array().unwrap();
-    assert_eq!(models.len(), 2, "{out}");
+    assert_eq!(models.len(), 3, "the shipped nano and tiny, and the copy: {out}");
     for m in models {
         assert!(m["object_psnr"].as_f64().is_some_and(|v| v.is_finite() && v > 0.0), "{m}");
         assert!(m["forward_ms"].as_f64().is_some_and(|v| v > 0.0), "{m}");
     }
-    assert_eq!(models[0]["object_psnr"], models[1]["object_psnr"], "the same weights score the same");
+    assert_eq!(models[1]["object_psnr"], models[2]["object_psnr"], "the same weights score the same");
     assert!(j["reference"]["forward_ms"].as_f64().is_some_and(|v| v > 0.0) && j["fma_ceiling_gflops"].as_f64().is_some_and(|v| v > 0.0), "{out}");
     assert!(png.exists());
     let bad = Command::new(env!("CARGO_BIN_EXE_rendernet")).args(["frontier", "--data", data.to_str().unwrap(), "--model", "nano", "--out", png.to_str().unwrap()]).output().unwrap();

@@ -6,7 +6,7 @@ use clap::Args;
 use rendernet::chart::{self, Cap, Options};
 use rendernet::data::Dataset;
 use rendernet::metrics::PSNR_CAP;
-use rendernet::nn::render::{Renderer, TINY_PHONG_WEIGHTS};
+use rendernet::nn::render::{NANO_PHONG_WEIGHTS, Renderer, TINY_PHONG_WEIGHTS};
 use rendernet::train::{eval::evaluate_bytes, head_for};
 use rendernet::{Error, Gpu, Light, Preset, RayMarcher, Result, Shader, View, bench};
 use serde_json::json;
@@ -23,7 +23,7 @@ pub struct FrontierArgs {
     #[arg(long, default_value_t = 100)]
     samples: usize,
     /// A model to add: LABEL=PRESET:WEIGHTS (e.g. nano=nano:nano.weights.safetensors);
-    /// repeat the flag for more. The shipped tiny weights are always included.
+    /// repeat the flag for more. The shipped nano and tiny weights are always included.
     #[arg(long = "model", value_name = "LABEL=PRESET:WEIGHTS")]
     models: Vec<String>,
     /// Timed forwards per model (the median is reported), after one warm-up.
@@ -71,7 +71,8 @@ fn median_ms(repeat: usize, mut f: impl FnMut() -> Result<()>) -> Result<f64> {
 /// Scores and times every model and the reference renderer; writes the chart.
 pub fn run(a: FrontierArgs) -> Result<()> {
     super::output::check_png_out(&a.out)?;
-    let mut models = vec![Model { label: "tiny (shipped)".into(), preset: Preset::tiny(), weights: TINY_PHONG_WEIGHTS.to_vec(), source: "embedded".into() }];
+    let shipped = |p: Preset, w: &[u8]| Model { label: format!("{} (shipped)", p.name), preset: p, weights: w.to_vec(), source: "embedded".into() };
+    let mut models = vec![shipped(Preset::nano(), NANO_PHONG_WEIGHTS), shipped(Preset::tiny(), TINY_PHONG_WEIGHTS)];
     for m in &a.models {
         models.push(parse_model(m)?);
     }

@@ -2,7 +2,7 @@
 //! `stress`.
 
 use clap::Args;
-use rendernet::nn::render::TINY_PHONG_WEIGHTS;
+use rendernet::nn::render::shipped_phong_weights;
 use rendernet::nn::rendernet::Preset;
 use rendernet::reference::Shader;
 use rendernet::{Error, Result};
@@ -12,11 +12,12 @@ use std::path::PathBuf;
 #[derive(Args, Debug)]
 pub struct WeightsArgs {
     /// Weights: a safetensors file from `rendernet train` (<out>.weights.safetensors, or the
-    /// checkpoint <out> itself, whose Adam state is ignored); default: the embedded tiny
-    /// Phong weights.
+    /// checkpoint <out> itself, whose Adam state is ignored); default: the embedded Phong
+    /// weights of --preset (tiny or nano).
     #[arg(long)]
     pub weights: Option<PathBuf>,
-    /// Network size the weights belong to.
+    /// Network size the weights belong to: tiny (default), nano (faster, less accurate) or
+    /// paper.
     #[arg(long, default_value = "tiny")]
     pub preset: String,
 }
@@ -33,12 +34,19 @@ impl WeightsArgs {
     }
 
     /// The weights' bytes and a name for messages, for a network trained on `shader`: the
-    /// file given, or the embedded weights of that shader where some are shipped.
+    /// file given, or the embedded weights of the preset and shader where some are shipped.
     pub fn load_for(&self, shader: Shader) -> Result<(Vec<u8>, String)> {
-        match (&self.weights, shader) {
-            (Some(p), _) => Ok((std::fs::read(p).map_err(|e| Error::Io { path: p.display().to_string(), source: e })?, p.display().to_string())),
-            (None, Shader::Phong) => Ok((TINY_PHONG_WEIGHTS.to_vec(), "embedded tiny-phong weights".to_string())),
-            (None, s) => Err(Error::Invalid(format!(
+        if let Some(p) = &self.weights {
+            return Ok((std::fs::read(p).map_err(|e| Error::Io { path: p.display().to_string(), source: e })?, p.display().to_string()));
+        }
+        let preset = self.preset()?;
+        match (shader, shipped_phong_weights(&preset)) {
+            (Shader::Phong, Some(w)) => Ok((w.to_vec(), format!("embedded {}-phong weights", preset.name))),
+            (Shader::Phong, None) => Err(Error::Invalid(format!(
+                "--preset {}: no weights are shipped for it; pass --weights FILE (make one with `rendernet train --preset {0}`)",
+                preset.name
+            ))),
+            (s, _) => Err(Error::Invalid(format!(
                 "--shader {}: no weights are shipped for it yet; pass --weights FILE (make one with \
                  `rendernet dataset --shader {0} ...` then `rendernet train`)",
                 s.name()

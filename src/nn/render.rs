@@ -13,6 +13,19 @@ use crate::voxel::VoxelGrid;
 /// and primitives (weights/README.md: the commands that made them, their log and curve).
 pub const TINY_PHONG_WEIGHTS: &[u8] = include_bytes!("../../weights/tiny-phong.safetensors");
 
+/// The `nano` preset's Phong weights (the rung below tiny: faster, less accurate; same data
+/// and recipe, shorter; weights/README.md).
+pub const NANO_PHONG_WEIGHTS: &[u8] = include_bytes!("../../weights/nano-phong.safetensors");
+
+/// The shipped Phong weights of `preset`, if any.
+pub fn shipped_phong_weights(preset: &Preset) -> Option<&'static [u8]> {
+    match preset.name {
+        "tiny" => Some(TINY_PHONG_WEIGHTS),
+        "nano" => Some(NANO_PHONG_WEIGHTS),
+        _ => None,
+    }
+}
+
 /// A RenderNet ready to render, for one image size.
 pub struct Renderer {
     preset: Preset,
