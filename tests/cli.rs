@@ -398,3 +398,30 @@ fn render_uses_the_shipped_weights_of_the_preset() {
     assert!(!out.status.success() && err.contains("--preset paper") && err.contains("--weights"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `stress --unseen DIR` adds one clean case per grid or mesh file of DIR (other files are
+/// skipped), for both methods; a folder without any is refused by flag name.
+#[test]
+fn stress_unseen_scores_every_shape_file_of_a_folder() {
+    let dir = scratch("unseen");
+    let shapes = dir.join("shapes");
+    std::fs::create_dir_all(&shapes).unwrap();
+    let corpus = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz-corpus");
+    for f in ["cube.off", "pattern.binvox"] {
+        std::fs::copy(corpus.join(f), shapes.join(f)).unwrap();
+    }
+    std::fs::write(shapes.join("notes.txt"), "not a shape").unwrap();
+    let png = dir.join("s.png");
+    let out = run_ok(&["stress", "--unseen", shapes.to_str().unwrap(), "--resolution", "32", "--json", "--out", png.to_str().unwrap()]);
+    let rows: Vec<serde_json::Value> = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"));
+    let unseen: Vec<&serde_json::Value> = rows.iter().filter(|r| r["sweep"] == "unseen").collect();
+    let labels: Vec<&str> = unseen.iter().map(|r| r["label"].as_str().unwrap()).collect();
+    assert_eq!(labels, ["cube", "cube", "pattern", "pattern"], "{out}");
+    assert!(unseen.iter().all(|r| r["object_psnr"].as_f64().is_some_and(|v| v > 0.0)), "{out}");
+    let empty = dir.join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    let out = rendernet().args(["stress", "--unseen", empty.to_str().unwrap(), "--out", png.to_str().unwrap()]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--unseen") && err.contains("no .binvox"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -85,39 +85,41 @@ pub fn run(a: FrontierArgs) -> Result<()> {
     let (grid, view, light) = (rendernet::bunny(), View::default(), Light::default());
     let mut rows = Vec::new();
     for m in &models {
-        let r = evaluate_bytes(&gpu, &m.preset, head, &m.weights, &m.source, &ds, a.samples)?;
+        let report = evaluate_bytes(&gpu, &m.preset, head, &m.weights, &m.source, &ds, a.samples)?;
         let mut net = Renderer::new(&gpu, m.preset.clone(), &m.weights, &m.source, 128)?.with_crop_margin(None);
         let ms = median_ms(a.repeat, || net.render(&gpu, &grid, &view, &light).map(drop))?;
         let params = rendernet::graph::params::parse_safetensors(&m.weights, &m.source)?.0.values().map(|(_, v)| v.len()).sum::<usize>();
-        rows.push(json!({
-            "label": m.label, "preset": m.preset.name, "weights": m.source, "parameters": params,
-            "object_psnr": r.object_psnr.mean, "object_psnr_ci95": r.object_psnr.ci95, "psnr": r.mean, "ssim": r.ssim.mean,
-            "black_object_psnr": r.black_object_psnr, "black_psnr": r.black, "samples": r.count, "forward_ms": ms,
-        }));
+        rows.push((m, params, report, ms));
     }
     let opts = rendernet::reference::Options { supersample: 2, ..Default::default() };
     let marcher = RayMarcher::new(&gpu).with_options(opts);
     let ref_ms = median_ms(a.repeat, || marcher.render(&gpu, &grid, &view, &light, Shader::Phong, 128).map(drop))?;
     let adapter = gpu.info.name.clone();
     let cpu = bench::cpu_model();
-    let points: Vec<(f64, f64, String)> = rows.iter().map(|r| (r["forward_ms"].as_f64().unwrap_or(0.0), r["object_psnr"].as_f64().unwrap_or(0.0), r["label"].as_str().unwrap_or("").to_string())).collect();
+    let points: Vec<(f64, f64, String)> = rows.iter().map(|(m, _, r, ms)| (*ms, r.object_psnr.mean as f64, m.label.clone())).collect();
     let groups = vec![("RenderNet", points), ("reference renderer (exact, not learned)", vec![(ref_ms, PSNR_CAP, "reference".to_string())])];
-    let slowest = rows.iter().filter_map(|r| r["forward_ms"].as_f64()).fold(ref_ms, f64::max);
+    let slowest = rows.iter().map(|row| row.3).fold(ref_ms, f64::max);
     let options = Options { cap: Some(Cap { at: PSNR_CAP, note: "exact".into() }), x_range: Some((0.0, 1.15 * slowest)), ..Options::default() };
     chart::scatter_chart(&a.out, "Speed against accuracy (held-out object PSNR)", &format!("forward ms, 128 px, on {adapter}"), "object PSNR (dB)", &groups, &options)?;
     if a.json {
+        let models: Vec<_> = rows
+            .iter()
+            .map(|(m, params, r, ms)| {
+                json!({
+                    "label": m.label, "preset": m.preset.name, "weights": m.source, "parameters": params,
+                    "object_psnr": r.object_psnr.mean, "object_psnr_ci95": r.object_psnr.ci95, "psnr": r.mean, "ssim": r.ssim.mean,
+                    "black_object_psnr": r.black_object_psnr, "black_psnr": r.black, "samples": r.count, "forward_ms": ms,
+                })
+            })
+            .collect();
         let j = json!({ "adapter": adapter, "cpu": cpu, "fma_ceiling_gflops": ceiling, "data": a.data.display().to_string(),
-            "models": rows, "reference": { "forward_ms": ref_ms, "object_psnr": null, "note": "the renderer that makes the targets: exact by definition" } });
+            "models": models, "reference": { "forward_ms": ref_ms, "object_psnr": null, "note": "the renderer that makes the targets: exact by definition" } });
         println!("{}", serde_json::to_string_pretty(&j).expect("plain JSON"));
     } else {
         println!("adapter: {adapter}; cpu: {}; FMA ceiling {ceiling:.1} GFLOP/s (same run)", cpu.as_deref().unwrap_or("unknown"));
         println!("{:<18} {:>10} {:>20} {:>10} {:>8} {:>11}", "model", "parameters", "object PSNR (black)", "full PSNR", "SSIM", "forward ms");
-        for r in &rows {
-            println!(
-                "{:<18} {:>10} {:>12.2} ({:>5.2}) {:>10.2} {:>8.3} {:>11.1}",
-                r["label"].as_str().unwrap_or(""), r["parameters"], r["object_psnr"].as_f64().unwrap_or(f64::NAN), r["black_object_psnr"].as_f64().unwrap_or(f64::NAN),
-                r["psnr"].as_f64().unwrap_or(f64::NAN), r["ssim"].as_f64().unwrap_or(f64::NAN), r["forward_ms"].as_f64().unwrap_or(f64::NAN)
-            );
+        for (m, params, r, ms) in &rows {
+            println!("{:<18} {params:>10} {:>12.2} ({:>5.2}) {:>10.2} {:>8.3} {ms:>11.1}", m.label, r.object_psnr.mean, r.black_object_psnr, r.mean, r.ssim.mean);
         }
         println!("{:<18} {:>10} {:>20} {:>10} {:>8} {:>11.1}", "reference", "-", "exact", "-", "-", ref_ms);
         println!("chart: {}", a.out.display());

@@ -46,10 +46,9 @@ pub struct StressArgs {
 /// The scene files of `dir` (extensions `voxel::load` reads), sorted, loaded.
 fn unseen_shapes(dir: &Path, resolution: usize) -> Result<Vec<(String, VoxelGrid)>> {
     let entries = std::fs::read_dir(dir).map_err(|e| Error::Invalid(format!("--unseen {}: {e}", dir.display())))?;
-    let known = ["binvox", "safetensors", "vox", "obj", "off", "ply"];
     let mut files: Vec<PathBuf> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().and_then(|e| e.to_str()).is_some_and(|e| known.contains(&e.to_ascii_lowercase().as_str())))
+        .filter(|p| p.extension().and_then(|e| e.to_str()).is_some_and(|e| rendernet::voxel::EXTENSIONS.contains(&e.to_ascii_lowercase().as_str())))
         .collect();
     files.sort();
     if files.is_empty() {

@@ -74,9 +74,9 @@ impl Augment {
     }
 
     /// `grid`, corrupted or not as drawn from `r`.
-    pub fn apply(&self, grid: &crate::voxel::VoxelGrid, r: &mut SplitMix64) -> crate::voxel::VoxelGrid {
+    pub fn apply(&self, grid: crate::voxel::VoxelGrid, r: &mut SplitMix64) -> crate::voxel::VoxelGrid {
         let (coin, seed) = (r.next_u64(), r.next_u64());
-        let mut g = grid.clone();
+        let mut g = grid;
         if *self == Augment::default() || coin % 2 == 0 {
             return g;
         }
@@ -181,7 +181,7 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
             let mut sample = train.get(i)?;
             let r = [rng.next_u64(), rng.next_u64(), rng.next_u64()];
             let (h0, w0) = batch::window_origin(p, &sample, w, r);
-            sample.grid = cfg.augment.apply(&sample.grid, &mut rng);
+            sample.grid = cfg.augment.apply(sample.grid, &mut rng);
             b.push(p, &sample, [h0, w0, w, w], &names)?;
         }
         feed(gpu, &cur, &b)?;

@@ -12,6 +12,9 @@ pub fn bunny() -> VoxelGrid {
     safetensors_io::from_bytes(BUNNY64, "embedded bunny64.safetensors").expect("the embedded bunny is a valid grid")
 }
 
+/// The extensions [`load`] reads (lower case).
+pub const EXTENSIONS: [&str; 6] = ["binvox", "safetensors", "vox", "obj", "off", "ply"];
+
 /// Loads any scene file, chosen by extension (case-insensitive): `.binvox`, `.safetensors`
 /// and MagicaVoxel `.vox` grids as stored; `.obj`, `.off` and `.ply` meshes voxelised
 /// anti-aliased (binary occupancy renders as stair-steps) into a `resolution`^3 grid.

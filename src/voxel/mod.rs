@@ -20,7 +20,7 @@ pub mod vox;
 pub mod voxelize;
 
 pub use binvox::Binvox;
-pub use load::{BUNNY64, bunny, load};
+pub use load::{BUNNY64, EXTENSIONS, bunny, load};
 pub use mesh::Mesh;
 pub use shapes::{Family, Shape};
 pub use voxelize::{VoxelizeOptions, voxelize};
