@@ -136,8 +136,7 @@ impl Renderer {
         let part = ex.read(gpu, net.image)?;
         // Pasted into a frame of the shader's background: outside the window is empty space.
         let (h, w, ch) = (win[2] * f, win[3] * f, self.shader.channels());
-        let background = if self.shader == Shader::Contour { 1.0 } else { 0.0 };
-        let mut data = vec![background; ch * self.size * self.size];
+        let mut data = vec![self.shader.background(); ch * self.size * self.size];
         for c in 0..ch {
             for y in 0..h {
                 let dst = (c * self.size + win[0] * f + y) * self.size + win[1] * f;

@@ -76,6 +76,12 @@ impl Shader {
         }
     }
 
+    /// The value of a background pixel (no surface hit): contours are drawn black on white
+    /// (reference_shade.wgsl), every other shader on black.
+    pub fn background(self) -> f32 {
+        if self == Shader::Contour { 1.0 } else { 0.0 }
+    }
+
     /// Short lowercase name, as the CLI spells it.
     pub fn name(self) -> &'static str {
         match self {
