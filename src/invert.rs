@@ -62,6 +62,13 @@ const RADIUS: (f64, f64) = (2.0, 9.0);
 /// Coarse starts re-scored at their own radius (silhouette IoU at the mid radius already
 /// ranks views well; this bounds the second pass's cost).
 const RESCORED: usize = 16;
+/// Light directions tried at every kept start, `(azimuth, elevation)` relative to the camera
+/// (degrees): the training lights' range (azimuth any, elevation 20..160) in 12 directions.
+const LIGHT_STARTS: [(f64, f64); 12] = [
+    (0.0, 45.0), (90.0, 45.0), (180.0, 45.0), (270.0, 45.0),
+    (0.0, 90.0), (90.0, 90.0), (180.0, 90.0), (270.0, 90.0),
+    (0.0, 135.0), (90.0, 135.0), (180.0, 135.0), (270.0, 135.0),
+];
 /// Radius of the coarse silhouette pass, mid-range of the training views.
 const COARSE_RADIUS: f64 = 4.65;
 
@@ -172,6 +179,30 @@ impl Inverter {
             .collect())
     }
 
+    /// `start` with the light, among [`LIGHT_STARTS`], whose render best matches `target`
+    /// (the window's pixels) by image MSE. The refinement follows the image gradient, which
+    /// from a light on the wrong side can pull the pose astray before the light gets there.
+    fn best_light(&self, gpu: &Gpu, sil: &mut (RenderNet, Executor), grid: &[f32], target: &[f32], start: Vars, win: &Window) -> Result<Vars> {
+        let cands: Vec<Vars> = LIGHT_STARTS.iter().map(|&(az, el)| Vars([start.0[0], start.0[1], start.0[2], az, el])).collect();
+        let (net, ex) = sil;
+        let batch = net.graph.info(net.pose).shape[0];
+        let mut best = (f64::INFINITY, start);
+        for chunk in cands.chunks(batch) {
+            let mut padded = chunk.to_vec();
+            padded.resize(batch, *chunk.last().expect("chunks are not empty"));
+            self.feed(gpu, net, ex, grid, &padded, win)?;
+            ex.forward(gpu)?;
+            let img = ex.read(gpu, net.image)?;
+            for (y, v) in img.chunks(target.len()).zip(chunk) {
+                let mse = y.iter().zip(target).map(|(a, b)| ((a.clamp(0.0, 1.0) - b) as f64).powi(2)).sum::<f64>();
+                if mse < best.0 {
+                    best = (mse, *v);
+                }
+            }
+        }
+        Ok(best.1)
+    }
+
     /// Checks `target`'s size and returns its foreground mask (full image).
     fn foreground(&self, target: &Image) -> Result<Vec<bool>> {
         if target.channels != 3 || target.size != self.size {
@@ -226,7 +257,11 @@ impl Inverter {
         }
         rescored.sort_by(|a, b| b.0.total_cmp(&a.0));
         let mut vars = with_twins(rescored.iter().map(|s| s.1), o.keep);
-        let (best, curve) = self.refine(gpu, &gv, &win.crop_rgb(target), &mut vars, o, &mut progress, &win)?;
+        let target_crop = win.crop_rgb(target);
+        for v in vars.iter_mut() {
+            *v = self.best_light(gpu, &mut sil, &gv, &target_crop, *v, &win)?;
+        }
+        let (best, curve) = self.refine(gpu, &gv, &target_crop, &mut vars, o, &mut progress, &win)?;
         // The estimate's picture and score: the whole frame, once.
         let full = Window::full(&self.preset, self.size);
         let (net, mut ex, _) = self.executor(gpu, 1, false, &full)?;

@@ -25,7 +25,7 @@ fn presets_build_with_the_papers_shapes() {
     let proj = big.graph.value("proj.weight").unwrap();
     assert_eq!(big.graph.info(proj).shape, [1024, 16 * 32, 1, 1]);
     assert!(RenderNet::build(&p, head, 1, [6, 8], false).is_err(), "windows must be multiples of 4");
-    assert!(Preset::by_name("huge").unwrap_err().to_string().contains("tiny or paper"));
+    assert!(Preset::by_name("huge").unwrap_err().to_string().contains("base or paper"));
 }
 
 fn rendernet(args: &[&str]) -> String {
@@ -228,4 +228,48 @@ fn frontier_scores_and_times_every_model() {
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(!bad.status.success() && err.contains("--model nano") && err.contains("LABEL=PRESET:WEIGHTS"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A training step records the same dispatches every time, so after the first one it must
+/// create no GPU buffer, texture or bind group (the executor's memo hands back last step's),
+/// and the reuse must not change a single bit: an executor that makes everything fresh (and
+/// zeroed) every step ends with identical weights, so no kernel reads scratch it never wrote.
+#[test]
+fn training_steps_after_the_first_create_no_gpu_objects() {
+    use rendernet::graph::Executor;
+    use rendernet::nn::camera::{light_values, pose_for_view};
+    use rendernet::ops::adam::Adam;
+    let gpu = Gpu::new().unwrap();
+    let p = Preset::nano();
+    let (n, hw) = (2, [16, 12]);
+    let net = RenderNet::build(&p, Head::Phong(phong_of(&Light::default())), n, hw, true).unwrap();
+    let size = |v| net.graph.info(v).shape.iter().product::<usize>();
+    let ramp = |len: usize, k: usize| (0..len).map(|i| ((i * k) % 17) as f32 / 16.0).collect::<Vec<f32>>();
+    let grid: Vec<f32> = ramp(size(net.grid), 7).iter().map(|&v| if v > 0.6 { 1.0 } else { 0.0 }).collect();
+    let pose: Vec<f32> = (0..n).flat_map(|i| pose_for_view(&View { azimuth: 30.0 + 50.0 * i as f64, ..View::default() }, p.input, p.cam, Some([24, 26, 16, 12]))).collect();
+    let light: Vec<f32> = (0..n).flat_map(|_| light_values(&Light::default())).collect();
+    let train = |steps: usize, reuse: bool| {
+        let mut ex = Executor::new(&gpu, net.graph.clone(), 5).unwrap();
+        ex.reuse_gpu_objects(reuse);
+        ex.feed(&gpu, net.grid, &grid).unwrap();
+        ex.feed(&gpu, net.pose, &pose).unwrap();
+        ex.feed(&gpu, net.light.unwrap(), &light).unwrap();
+        for (k, (_, v)) in net.targets.iter().enumerate() {
+            ex.feed(&gpu, *v, &ramp(size(*v), 3 + k)).unwrap();
+        }
+        let stats: Vec<_> = (0..steps).map(|_| ex.train_step(&gpu, net.loss.unwrap(), &Adam::new(1e-3)).unwrap()).collect();
+        let weights: Vec<Vec<f32>> = net.graph.params().into_iter().map(|v| ex.read(&gpu, v).unwrap()).collect();
+        (stats, weights)
+    };
+    let (stats, weights) = train(3, true);
+    assert!(stats[0].created > 0, "the first step must create its scratch and bind groups: {:?}", stats[0]);
+    for (k, s) in stats.iter().enumerate().skip(1) {
+        assert_eq!(s.created, 0, "step {} created GPU objects: {s:?}", k + 1);
+        assert_eq!((s.dispatches, s.submits), (stats[0].dispatches, 1), "step {}: {s:?}", k + 1);
+    }
+    assert!(stats[0].scratch_bytes > 0, "{:?}", stats[0]);
+    let (fresh_stats, fresh) = train(3, false);
+    assert!(fresh_stats[2].created > 0, "{:?}", fresh_stats[2]);
+    assert!(weights == fresh, "reusing scratch and bind groups changed the result");
+
 }

@@ -10,3 +10,4 @@ pub mod loss;
 pub mod phong;
 pub mod projection;
 pub mod resample;
+pub mod resize_conv;

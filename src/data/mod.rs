@@ -25,7 +25,7 @@ pub use manifest::{LightParams, Manifest, SplitInfo};
 use crate::error::{Error, Result};
 use crate::reference::{Image, Light, Shader, View};
 use crate::voxel::VoxelGrid;
-use safetensors::{Dtype, SafeTensors};
+use safetensors::Dtype;
 use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -103,13 +103,32 @@ pub struct Sample {
 }
 
 /// One shard's tensors, decoded.
+/// A shard's small per-sample tensors, read whole, and its open file, from which a sample's
+/// grid and images are read at their offsets (a shard is ~40 MB; reading it whole for one
+/// random sample cost 66 ms, more than a training step).
 struct Shard {
     len: usize,
-    grids: Vec<u8>,
     views: Vec<f32>,
     lights: Vec<f32>,
     shape_ids: Vec<f32>,
-    images: BTreeMap<String, Vec<u8>>,
+    file: Mutex<std::fs::File>,
+    name: String,
+    /// File offset of each tensor's first byte.
+    offsets: BTreeMap<String, u64>,
+}
+
+impl Shard {
+    /// `len` bytes of tensor `tensor` from byte `start` of its data.
+    fn read(&self, tensor: &str, start: usize, len: usize) -> Result<Vec<u8>> {
+        use std::io::Seek;
+        let at = self.offsets[tensor] + start as u64;
+        let mut f = self.file.lock().unwrap_or_else(|e| e.into_inner());
+        let mut buf = vec![0u8; len];
+        f.seek(std::io::SeekFrom::Start(at))
+            .and_then(|_| f.read_exact(&mut buf))
+            .map_err(|e| Error::Io { path: self.name.clone(), source: e })?;
+        Ok(buf)
+    }
 }
 
 /// An opened dataset: manifest and shard headers validated, shards loaded on demand.
@@ -118,8 +137,8 @@ pub struct Dataset {
     /// The parsed manifest.
     pub manifest: Manifest,
     outputs: Vec<(&'static str, Shader, usize)>,
-    /// Recently used shards; two, so a reader alternating between splits does not thrash.
-    cache: Mutex<Vec<(Split, usize, Arc<Shard>)>>,
+    /// Shards opened so far (small: see [`Shard`]).
+    cache: Mutex<std::collections::HashMap<(Split, usize), Arc<Shard>>>,
 }
 
 /// One split of a [`Dataset`].
@@ -145,7 +164,7 @@ impl Dataset {
             dir,
             manifest,
             outputs,
-            cache: Mutex::new(Vec::new()),
+            cache: Mutex::new(Default::default()),
         };
         for split in [Split::Train, Split::Test] {
             for k in 0..ds.info(split).shards.len() {
@@ -195,8 +214,9 @@ impl Dataset {
         self.dir.join(&self.info(split).shards[k])
     }
 
-    /// Reads only the header of a shard and checks it (cheap: no tensor data is read).
-    fn check_header(&self, split: Split, k: usize) -> Result<()> {
+    /// Reads only the header of a shard and checks it (cheap: no tensor data is read);
+    /// returns the file offset of each tensor's data.
+    fn check_header(&self, split: Split, k: usize) -> Result<BTreeMap<String, u64>> {
         let path = self.shard_path(split, k);
         let name = path.display().to_string();
         let io = |e| Error::Io {
@@ -223,6 +243,8 @@ impl Dataset {
             .as_object()
             .ok_or_else(|| bad("safetensors header is not a JSON object".into()))?;
         let mut data_end = 0u64;
+        let mut offsets = BTreeMap::new();
+        let mut spans = Vec::new();
         let expected = self.expected(split, k);
         for (tname, dtype, shape) in &expected {
             let t = obj
@@ -245,12 +267,15 @@ impl Dataset {
                     "tensor `{tname}` has shape {got_shape:?}, expected {shape:?}"
                 )));
             }
-            let end = t
-                .get("data_offsets")
-                .and_then(|o| o.get(1))
-                .and_then(|e| e.as_u64())
-                .unwrap_or(u64::MAX);
+            let at = |i: usize| t.get("data_offsets").and_then(|o| o.get(i)).and_then(|e| e.as_u64());
+            let (start, end) = (at(0).unwrap_or(u64::MAX), at(1).unwrap_or(u64::MAX));
+            let bytes = shape.iter().product::<usize>() as u64 * if *dtype == Dtype::U8 { 1 } else { 4 };
+            if end.checked_sub(start) != Some(bytes) {
+                return Err(bad(format!("tensor `{tname}` has data_offsets [{start}, {end}], expected {bytes} bytes")));
+            }
             data_end = data_end.max(end);
+            spans.push((start, end));
+            offsets.insert(tname.clone(), 8 + hlen + start);
         }
         if let Some(extra) = obj
             .keys()
@@ -258,73 +283,47 @@ impl Dataset {
         {
             return Err(bad(format!("unexpected tensor `{extra}`")));
         }
+        // The tensors must tile the data section: no overlaps, no gaps.
+        spans.sort_unstable();
+        if spans.first().is_some_and(|s| s.0 != 0) {
+            return Err(bad(format!("tensor data starts at byte {} of the data section, not 0", spans[0].0)));
+        }
+        if let Some(w) = spans.windows(2).find(|w| w[0].1 != w[1].0) {
+            return Err(bad(format!("tensor data overlaps or leaves a gap at bytes {}..{}", w[0].1.min(w[1].0), w[0].1.max(w[1].0))));
+        }
         if 8 + hlen + data_end != file_len {
             return Err(bad(format!(
                 "file is {file_len} bytes but its header describes {}",
                 8 + hlen.saturating_add(data_end)
             )));
         }
-        Ok(())
+        Ok(offsets)
     }
 
     /// Loads (or takes from the cache) shard `k` of `split`.
     fn shard(&self, split: Split, k: usize) -> Result<Arc<Shard>> {
         let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(p) = cache.iter().position(|(s, j, _)| *s == split && *j == k) {
-            let hit = cache.remove(p);
-            let shard = hit.2.clone();
-            cache.insert(0, hit);
-            return Ok(shard);
+        if let Some(s) = cache.get(&(split, k)) {
+            return Ok(s.clone());
         }
-        let shard = Arc::new(self.load_shard(split, k)?);
-        cache.insert(0, (split, k, shard.clone()));
-        cache.truncate(2);
+        let shard = Arc::new(self.open_shard(split, k)?);
+        cache.insert((split, k), shard.clone());
         Ok(shard)
     }
 
-    fn load_shard(&self, split: Split, k: usize) -> Result<Shard> {
+    fn open_shard(&self, split: Split, k: usize) -> Result<Shard> {
         let path = self.shard_path(split, k);
         let name = path.display().to_string();
-        let bytes = std::fs::read(&path).map_err(|e| Error::Io {
-            path: name.clone(),
-            source: e,
-        })?;
-        let st = SafeTensors::deserialize(&bytes)
-            .map_err(|e| Error::Invalid(format!("{name}: not a valid safetensors file: {e}")))?;
-        let mut tensors = BTreeMap::new();
-        for (tname, dtype, shape) in self.expected(split, k) {
-            let t = st
-                .tensor(&tname)
-                .map_err(|e| Error::Invalid(format!("{name}: tensor `{tname}`: {e}")))?;
-            if t.dtype() != dtype || t.shape() != shape.as_slice() {
-                return Err(Error::Invalid(format!(
-                    "{name}: tensor `{tname}` is {:?} {:?}, expected {dtype:?} {shape:?}",
-                    t.dtype(),
-                    t.shape()
-                )));
-            }
-            tensors.insert(tname, t.data().to_vec());
-        }
-        let f32s = |b: Vec<u8>| {
-            b.chunks_exact(4)
-                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-                .collect::<Vec<f32>>()
-        };
-        let mut take = |n: &str| tensors.remove(n).unwrap_or_default();
-        let (grids, views, lights, shape_ids) = (
-            take(GRIDS),
-            f32s(take(VIEWS)),
-            f32s(take(LIGHTS)),
-            f32s(take(SHAPE_IDS)),
-        );
-        Ok(Shard {
-            len: shape_ids.len(),
-            grids,
-            views,
-            lights,
-            shape_ids,
-            images: tensors,
-        })
+        // Checked again: the file may have changed since `open`.
+        let offsets = self.check_header(split, k)?;
+        let file = std::fs::File::open(&path).map_err(|e| Error::Io { path: name.clone(), source: e })?;
+        let n = (self.info(split).count - k * SHARD_SIZE).min(SHARD_SIZE);
+        let mut shard = Shard { len: n, views: Vec::new(), lights: Vec::new(), shape_ids: Vec::new(), file: Mutex::new(file), name, offsets };
+        let f32s = |b: Vec<u8>| b.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect::<Vec<f32>>();
+        shard.views = f32s(shard.read(VIEWS, 0, n * 3 * 4)?);
+        shard.lights = f32s(shard.read(LIGHTS, 0, n * 5 * 4)?);
+        shard.shape_ids = f32s(shard.read(SHAPE_IDS, 0, n * 4)?);
+        Ok(shard)
     }
 }
 
@@ -356,7 +355,7 @@ impl SplitView<'_> {
         let m = &ds.manifest;
         let unpack = |b: &[u8]| b.iter().map(|&x| x as f32 / 255.0).collect::<Vec<f32>>();
         let r3 = m.res * m.res * m.res;
-        let grid = VoxelGrid::new([m.res; 3], unpack(&shard.grids[j * r3..(j + 1) * r3]))
+        let grid = VoxelGrid::new([m.res; 3], unpack(&shard.read(GRIDS, j * r3, r3)?))
             .map_err(|e| Error::Invalid(e.to_string()))?;
         let v = &shard.views[j * 3..j * 3 + 3];
         let l = &shard.lights[j * 5..j * 5 + 5];
@@ -379,17 +378,10 @@ impl SplitView<'_> {
             .outputs
             .iter()
             .map(|&(name, _, c)| {
-                let data = unpack(&shard.images[name][j * c * s2..(j + 1) * c * s2]);
-                (
-                    name.to_string(),
-                    Image {
-                        channels: c,
-                        size: m.image,
-                        data,
-                    },
-                )
+                let data = unpack(&shard.read(name, j * c * s2, c * s2)?);
+                Ok((name.to_string(), Image { channels: c, size: m.image, data }))
             })
-            .collect();
+            .collect::<Result<_>>()?;
         Ok(Sample {
             grid,
             view,

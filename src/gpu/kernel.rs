@@ -150,7 +150,8 @@ impl Gpu {
             visibility: wgpu::ShaderStages::COMPUTE,
             ty: wgpu::BindingType::Buffer {
                 ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
+                // Recordings place parameter blocks in shared chunks (see `memo`).
+                has_dynamic_offset: true,
                 min_binding_size: None,
             },
             count: None,
@@ -181,6 +182,22 @@ impl Gpu {
         p
     }
 
+    /// A bind group of `layout`: the uniform block at binding 0, then `args`. Counted in
+    /// [`Gpu::created_count`].
+    pub(crate) fn bind_group(&self, layout: &wgpu::BindGroupLayout, uniform: wgpu::BufferBinding, args: &[Arg]) -> wgpu::BindGroup {
+        let mut entries = vec![wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::Buffer(uniform) }];
+        for (i, a) in args.iter().enumerate() {
+            let resource = match a {
+                Arg::R(t) | Arg::W(t) => t.buffer().as_entire_binding(),
+                Arg::Absent => self.dummy.as_entire_binding(),
+                Arg::Texture(v, _) | Arg::StorageTexture(v, _) => wgpu::BindingResource::TextureView(v),
+            };
+            entries.push(wgpu::BindGroupEntry { binding: i as u32 + 1, resource });
+        }
+        super::memo::note_created();
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout, entries: &entries })
+    }
+
     /// Records one dispatch of `shader::entry` into `pass`. `params` is the kernel's uniform
     /// block (a `#[repr(C)]` Pod struct), `args` its storage buffers in binding order.
     pub fn dispatch<P: bytemuck::Pod>(
@@ -206,27 +223,21 @@ impl Gpu {
         // Uniform blocks are padded to 16 bytes, as WGSL rounds struct sizes for uniforms.
         let mut bytes = bytemuck::bytes_of(params).to_vec();
         bytes.resize(bytes.len().div_ceil(16).max(1) * 16, 0);
-        let ubuf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("params"),
-            contents: &bytes,
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let mut entries = vec![wgpu::BindGroupEntry { binding: 0, resource: ubuf.as_entire_binding() }];
-        for (i, a) in args.iter().enumerate() {
-            let resource = match a {
-                Arg::R(t) | Arg::W(t) => t.buffer().as_entire_binding(),
-                Arg::Absent => self.dummy.as_entire_binding(),
-                Arg::Texture(v, _) | Arg::StorageTexture(v, _) => wgpu::BindingResource::TextureView(v),
-            };
-            entries.push(wgpu::BindGroupEntry { binding: i as u32 + 1, resource });
-        }
-        let bg = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: None,
-            layout: &p.layout,
-            entries: &entries,
-        });
+        let (bg, offset) = match self.memo_bind((shader.name, entry), &p.layout, &bytes, args) {
+            Some(r) => r?,
+            None => {
+                super::memo::note_created();
+                let ubuf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("params"),
+                    contents: &bytes,
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+                let binding = wgpu::BufferBinding { buffer: &ubuf, offset: 0, size: None };
+                (self.bind_group(&p.layout, binding, args), 0)
+            }
+        };
         pass.set_pipeline(&p.pipeline);
-        pass.set_bind_group(0, &bg, &[]);
+        pass.set_bind_group(0, &bg, &[offset]);
         pass.dispatch_workgroups(workgroups[0], workgroups[1], workgroups[2]);
         self.dispatches.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         Ok(())

@@ -4,11 +4,14 @@
 mod calibration;
 mod context;
 mod kernel;
+mod memo;
 mod pool;
 mod tensor;
 
 pub use kernel::{Arg, Shader, grid_1d, MAX_WORKGROUPS_PER_DIM, SHADER_DIR_ENV};
 pub(crate) use kernel::wgsl;
+pub use memo::Memo;
+pub(crate) use memo::op_done;
 pub use pool::BufferPool;
 pub use tensor::Tensor;
 pub(crate) use tensor::read_staging;
@@ -49,6 +52,7 @@ impl Gpu {
     /// With no adapter, the error says what was tried and how to install lavapipe.
     pub fn new() -> Result<Gpu> {
         let o = context::open()?;
+        memo::note_created();
         let dummy = o.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("dummy"),
             size: 16,
@@ -108,6 +112,7 @@ impl Gpu {
 
     /// Submits one encoder and blocks until the device has finished it.
     pub fn submit_and_wait(&self, enc: wgpu::CommandEncoder) -> Result<()> {
+        self.flush_memo();
         let idx = self.queue.submit([enc.finish()]);
         SUBMITS.with(|c| c.set(c.get() + 1));
         self.device

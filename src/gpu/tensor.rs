@@ -22,6 +22,7 @@ impl Tensor {
     /// larger than one storage binding on this device.
     pub fn zeros(gpu: &Gpu, shape: &[usize]) -> Result<Tensor> {
         let bytes = Self::checked_bytes(gpu, shape)?;
+        super::memo::note_created();
         let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: None,
             size: bytes,
@@ -42,6 +43,7 @@ impl Tensor {
                 bytes / 4
             )));
         }
+        super::memo::note_created();
         let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: None,
             size: bytes,
@@ -88,6 +90,7 @@ impl Tensor {
     /// Copies the tensor back to the host (one submit and wait).
     pub fn to_vec(&self, gpu: &Gpu) -> Result<Vec<f32>> {
         let bytes = self.numel() as u64 * 4;
+        super::memo::note_created();
         let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
             size: bytes,

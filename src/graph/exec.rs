@@ -11,7 +11,7 @@
 use super::op::Ctx;
 use super::{Graph, Kind, Value};
 use crate::error::{Error, Result};
-use crate::gpu::{BufferPool, Gpu, Tensor};
+use crate::gpu::{BufferPool, Gpu, Memo, Tensor};
 use crate::{ops, rng};
 
 /// What one run recorded and allocated.
@@ -27,6 +27,14 @@ pub struct StepStats {
     pub pool_bytes: u64,
     /// Bytes all forward values and gradients would take without reuse.
     pub tensor_bytes: u64,
+    /// Bytes of the ops' scratch (packed conv operands, partial sums), uniform blocks and
+    /// textures the run's [`crate::gpu::Memo`] holds: pooled per op, kept across runs.
+    pub scratch_bytes: u64,
+    /// GPU objects (buffers, textures, bind groups) created during the run: after a
+    /// graph's first run of a kind (forward, backward, training step), none.
+    pub created: u64,
+    /// A training step's loss, read back by the step's own submit (with the NaN guard).
+    pub loss: Option<f32>,
 }
 
 /// Owns the GPU tensors of one graph and runs it.
@@ -46,6 +54,15 @@ pub struct Executor {
     loss_one: Option<Tensor>,
     /// Gradient guard flags `[1 + params]` and the buffer they are copied to for reading.
     guard: Option<(Tensor, wgpu::Buffer)>,
+    /// What the last forward, backward and training run created, for the next one of the
+    /// same kind (each records its own sequence of dispatches).
+    memos: [Memo; 3],
+    /// Transposed-conv weights kept resize-convolutions after every Adam step, and the
+    /// projector tensor (see [`Executor::keep_resize_conv`]).
+    resize_convs: Vec<Value>,
+    projector: Option<Tensor>,
+    /// Whether runs reuse the memo's GPU objects (see [`Executor::reuse_gpu_objects`]).
+    reuse: bool,
 }
 
 fn bytes(shape: &[usize]) -> u64 {
@@ -80,6 +97,10 @@ impl Executor {
             adam_state: vec![None; n],
             loss_one: None,
             guard: None,
+            memos: Default::default(),
+            resize_convs: Vec::new(),
+            projector: None,
+            reuse: true,
             graph,
         })
     }
@@ -120,6 +141,31 @@ impl Executor {
         for p in self.graph.params() {
             self.grad_wanted[p.0] = false;
         }
+    }
+
+    /// With `false`, every run makes fresh uniform buffers, bind groups and zeroed scratch
+    /// instead of reusing the last run's (see [`crate::gpu::Memo`]): slower, for checking
+    /// that reuse changes nothing (a kernel that read scratch it never wrote would differ).
+    pub fn reuse_gpu_objects(&mut self, reuse: bool) {
+        self.reuse = reuse;
+    }
+
+    /// Keeps the 4x4 transposed-conv weight `v` (`[Cin, Cout, 4, 4]`) a resize-convolution:
+    /// every training step projects it back onto that subspace right after Adam, on the GPU
+    /// and in the step's own submit (see [`crate::graph::resize_conv`]). The weight is taken
+    /// to be one already (`Init::XavierUpsample`, or a checkpoint of such a run).
+    pub fn keep_resize_conv(&mut self, gpu: &Gpu, v: Value) -> Result<()> {
+        let info = self.graph.info(v);
+        if !matches!(info.kind, Kind::Param(_)) || info.shape.len() != 4 || info.shape[2..] != [4, 4] {
+            return Err(Error::Invalid(format!("'{}' {:?} is not a [Cin, Cout, 4, 4] parameter", info.name, info.shape)));
+        }
+        if self.projector.is_none() {
+            self.projector = Some(ops::resize_conv::projector(gpu)?);
+        }
+        if !self.resize_convs.contains(&v) {
+            self.resize_convs.push(v);
+        }
+        Ok(())
     }
 
     /// Reads a value: an input, a parameter, or a node output marked with `keep`.
@@ -233,34 +279,80 @@ impl Executor {
                 self.pool.release(t);
             }
         }
-        let (d0, s0) = (gpu.dispatch_count(), gpu.submit_count());
+        let kind = match (loss, adam) {
+            (None, _) => 0,
+            (Some(_), None) => 1,
+            (Some(_), Some(_)) => 2,
+        };
+        let (d0, s0, c0) = (gpu.dispatch_count(), gpu.submit_count(), gpu.created_count());
+        self.pool.begin_run();
+        let mut memo = std::mem::take(&mut self.memos[kind]);
+        let tensor_bytes = if self.reuse {
+            gpu.recording(&mut memo, || self.record_and_submit(gpu, &nodes, &bw, loss, adam, &last, &last_grad))
+        } else {
+            self.record_and_submit(gpu, &nodes, &bw, loss, adam, &last, &last_grad)
+        };
+        let scratch_bytes = memo.bytes();
+        self.memos[kind] = memo;
+        let tensor_bytes = tensor_bytes?;
+        let mut step_loss = None;
+        if adam.is_some() {
+            step_loss = Some(self.check_guard(gpu)?);
+            self.step += 1;
+        }
+        Ok(StepStats {
+            dispatches: gpu.dispatch_count() - d0,
+            submits: gpu.submit_count() - s0,
+            pool_bytes: self.pool.allocated_bytes(),
+            tensor_bytes,
+            scratch_bytes,
+            created: gpu.created_count() - c0,
+            loss: step_loss,
+        })
+    }
+
+    /// Records the run into one encoder and submits it; returns the bytes of every tensor
+    /// placed (see [`Executor::record`]).
+    #[allow(clippy::too_many_arguments)]
+    fn record_and_submit(
+        &mut self,
+        gpu: &Gpu,
+        nodes: &[super::Node],
+        bw: &[bool],
+        loss: Option<Value>,
+        adam: Option<&ops::adam::Adam>,
+        last: &[usize],
+        last_grad: &[usize],
+    ) -> Result<u64> {
         let tensor_bytes;
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
-            tensor_bytes = self.record(gpu, &mut pass, &nodes, &bw, loss, &last, &last_grad)?;
+            tensor_bytes = self.record(gpu, &mut pass, nodes, bw, loss, last, last_grad)?;
             if let Some(adam) = adam {
                 self.record_adam(gpu, &mut pass, adam)?;
             }
         }
-        if let (Some(_), Some((flags, staging))) = (adam, &self.guard) {
-            enc.copy_buffer_to_buffer(flags.buffer(), 0, staging, 0, staging.size());
+        if let (Some(_), Some((flags, staging)), Some(l)) = (adam, &self.guard, loss) {
+            let fb = flags.buffer().size();
+            enc.copy_buffer_to_buffer(flags.buffer(), 0, staging, 0, fb);
+            let l = self.values[l.0].as_ref().expect("the loss is kept");
+            enc.copy_buffer_to_buffer(l.buffer(), 0, staging, fb, 4);
         }
         gpu.submit_and_wait(enc)?;
-        if adam.is_some() {
-            self.check_guard(gpu)?;
-            self.step += 1;
-        }
-        Ok(StepStats { dispatches: gpu.dispatch_count() - d0, submits: gpu.submit_count() - s0, pool_bytes: self.pool.allocated_bytes(), tensor_bytes })
+        Ok(tensor_bytes)
     }
 
-    /// Reads the guard flags copied out in the step's own submit; on NaN/Inf names the first
-    /// parameter whose gradient held it (the GPU already skipped the update).
-    fn check_guard(&self, gpu: &Gpu) -> Result<()> {
-        let Some((_, staging)) = &self.guard else { return Ok(()) };
-        let flags = crate::gpu::read_staging(gpu, staging)?;
+    /// Reads the guard flags and the loss copied out in the step's own submit; returns the
+    /// loss, or on NaN/Inf names the first parameter whose gradient held it (the GPU
+    /// already skipped the update).
+    fn check_guard(&self, gpu: &Gpu) -> Result<f32> {
+        let (flags, staging) = self.guard.as_ref().expect("a training step sets the guard up");
+        let read = crate::gpu::read_staging(gpu, staging)?;
+        let n = flags.numel();
+        let (flags, loss) = (&read[..n], read[(flags.buffer().size() / 4) as usize]);
         if flags[0] == 0.0 {
-            return Ok(());
+            return Ok(loss);
         }
         let params = self.graph.params();
         let bad = (1..flags.len()).find(|&k| flags[k] != 0.0).map(|k| self.graph.info(params[k - 1]).name.clone());
@@ -279,12 +371,8 @@ impl Executor {
         let params = self.graph.params();
         if self.guard.is_none() {
             let flags = Tensor::zeros(gpu, &[1 + params.len()])?;
-            let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("guard readback"),
-                size: flags.buffer().size(),
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
+            // The flags, then the loss.
+            let staging = gpu.new_buffer("guard readback", flags.buffer().size() + 4, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
             self.guard = Some((flags, staging));
         }
         let flags = self.guard.as_ref().expect("just set").0.clone();
@@ -303,6 +391,11 @@ impl Executor {
             let (m, s) = self.adam_state[v.0].as_ref().expect("just set");
             let p = self.values[v.0].as_ref().expect("params are always allocated");
             adam.step_guarded(gpu, pass, t, p, g, m, s, Some(&flags))?;
+        }
+        if let Some(proj) = &self.projector {
+            for v in &self.resize_convs {
+                ops::resize_conv::project(gpu, pass, proj, self.values[v.0].as_ref().expect("params are always allocated"))?;
+            }
         }
         Ok(())
     }
@@ -339,6 +432,7 @@ impl Executor {
                 let mut ctx = Ctx { gpu, pass: &mut *pass, seed: self.node_seed(k), training: self.training };
                 n.op.forward(&mut ctx, &ins, &y).map_err(|e| node_err(&n.name, e))?;
             }
+            crate::gpu::op_done();
             self.values[n.output.0] = Some(y);
             for v in n.inputs.iter().chain([&n.output]) {
                 self.release_if_dead(*v, k, last);
@@ -404,6 +498,7 @@ impl Executor {
                     self.pool.release(t);
                 }
             }
+            crate::gpu::op_done();
             if last_grad[n.output.0] == pos && !self.grad_wanted[n.output.0] {
                 if let Some(t) = self.grads[n.output.0].take() {
                     self.pool.release(t);

@@ -236,9 +236,11 @@ impl Op {
                 some(dx[1], |d| ops::resample::backward_pose(g, p, x[0], x[1], dy, d))
             }
             Op::Phong(ph) => {
-                let d = or_scratch(g, x, dx)?;
-                let grads = ops::phong::Inputs { normal: &d[0], albedo: &d[1], mask: &d[2], light: &d[3] };
-                ph.backward(g, p, &phong_inputs(x), dy, &grads)
+                // The maps kernel writes all three map gradients; the light's is a kernel and a
+                // reduction of its own, run only when asked for (inverse rendering, not training).
+                let d = or_scratch(g, &x[..3], &dx[..3])?;
+                ph.backward_maps(g, p, &phong_inputs(x), dy, [&d[0], &d[1], &d[2]])?;
+                some(dx[3], |d| ph.backward_light(g, p, &phong_inputs(x), dy, d))
             }
             Op::Loss(l) => some(dx[0], |d| l.backward(g, p, x[0], x[1], dy, d)),
         }
@@ -260,7 +262,7 @@ fn phong_inputs<'a>(x: &[&'a Tensor]) -> ops::phong::Inputs<'a> {
 /// The requested gradient tensors, with scratch standing in for unrequested ones, for
 /// kernels that always write every gradient.
 fn or_scratch(g: &Gpu, x: &[&Tensor], dx: &[Option<&Tensor>]) -> Result<Vec<Tensor>> {
-    dx.iter().zip(x).map(|(d, x)| d.map_or_else(|| Tensor::zeros(g, x.shape()), |t| Ok(t.clone()))).collect()
+    dx.iter().zip(x).map(|(d, x)| d.map_or_else(|| g.scratch(x.shape()), |t| Ok(t.clone()))).collect()
 }
 
 fn some(t: Option<&Tensor>, f: impl FnOnce(&Tensor) -> Result<()>) -> Result<()> {

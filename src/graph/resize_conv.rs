@@ -31,6 +31,11 @@ pub fn project(w: &mut [f32]) {
     }
 }
 
+/// The projector of [`project`] in f32, row-major (for the GPU kernel `ops::resize_conv`).
+pub fn projector_f32() -> Vec<f32> {
+    projector().iter().flatten().map(|&v| v as f32).collect()
+}
+
 /// The 16x9 matrix `A` with `expand(k) = A k`: output tap `(y, x)` sums the 3x3 taps
 /// `(ky, kx)` with `ky` in `{y-1, y}` and `kx` in `{x-1, x}` (inside 0..3).
 fn matrix() -> [[f64; 9]; 16] {

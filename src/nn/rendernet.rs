@@ -48,6 +48,18 @@ impl Preset {
         Preset { name: "nano", input: 32, cam: 64, c3: [4, 8], res3d: 0, proj: 32, c2: 16, res2d: 1, up: vec![16, 8] }
     }
 
+    /// The rung above [`Preset::tiny`]: the same grids and image, a 2D trunk twice as wide
+    /// (64 channels, projection 256->128) with 3 residual blocks, for sharper shading.
+    pub fn small() -> Preset {
+        Preset { name: "small", input: 32, cam: 64, c3: [8, 16], res3d: 0, proj: 128, c2: 64, res2d: 3, up: vec![32, 16] }
+    }
+
+    /// The rung between [`Preset::small`] and [`Preset::paper`]: wider 3D convs (16/32) with
+    /// one 3D residual block, a 128-channel 2D trunk with 4 residual blocks.
+    pub fn base() -> Preset {
+        Preset { name: "base", input: 32, cam: 64, c3: [16, 32], res3d: 1, proj: 128, c2: 128, res2d: 4, up: vec![64, 32] }
+    }
+
     /// The paper's appendix sizes (64^3 input into a 128^3 grid, 512^2 image); for real GPUs.
     pub fn paper() -> Preset {
         Preset {
@@ -68,8 +80,10 @@ impl Preset {
         match name {
             "nano" => Ok(Self::nano()),
             "tiny" => Ok(Self::tiny()),
+            "small" => Ok(Self::small()),
+            "base" => Ok(Self::base()),
             "paper" => Ok(Self::paper()),
-            _ => Err(Error::Invalid(format!("unknown preset '{name}'; expected nano, tiny or paper"))),
+            _ => Err(Error::Invalid(format!("unknown preset '{name}'; expected nano, tiny, small, base or paper"))),
         }
     }
 

@@ -35,7 +35,7 @@ fn dispatch(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, entry: &'static str, mu
 
 /// `t` ([N, c, sp...]) repacked channels-last as [N, sp..., cpad], channels past `c` zero.
 fn pack_input(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, t: &Tensor, n: usize, c: usize, sp: [usize; 3], cpad: usize) -> Result<Tensor> {
-    let out = Tensor::zeros(gpu, &[n, volume(sp), cpad])?;
+    let out = gpu.scratch(&[n, volume(sp), cpad])?;
     let [od, oh, ow] = sp.map(|v| v as u32);
     let p = Params { n: n as u32, ci: c as u32, od, oh, ow, cpad: cpad as u32, ..Default::default() };
     dispatch(gpu, pass, "conv_fast_pack_input", p, &[Arg::R(t), Arg::W(&out)], n * volume(sp))?;
@@ -89,7 +89,7 @@ fn pack_folded(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Fo
     if f.fold() == 1 {
         return pack_input(gpu, pass, x, g.n, g.ci, g.input, cpad);
     }
-    let out = Tensor::zeros(gpu, &[g.n, volume(f.g.input), cpad])?;
+    let out = gpu.scratch(&[g.n, volume(f.g.input), cpad])?;
     let p = folded_params(g, f, cpad);
     dispatch(gpu, pass, "conv_fast_pack_folded", p, &[Arg::R(x), Arg::W(&out)], g.n * volume(f.g.input))?;
     Ok(out)
@@ -111,7 +111,7 @@ fn folded_params(g: &Geometry, f: &Folded, cpad: usize) -> Params {
 /// dispatch geometry, with `flip` and `fold` or a phase's sub-kernel set: see the shader).
 fn pack_weights(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: &Tensor) -> Result<Tensor> {
     let taps = (p.kd * p.kh * p.kw) as usize;
-    let out = Tensor::zeros(gpu, &[taps, p.cpad as usize, p.co16 as usize * 16])?;
+    let out = gpu.scratch(&[taps, p.cpad as usize, p.co16 as usize * 16])?;
     dispatch(gpu, pass, "conv_fast_pack_weights", p, &[Arg::R(w), Arg::W(&out)], out.numel())?;
     Ok(out)
 }
@@ -191,21 +191,11 @@ impl Packed {
     }
 }
 
-/// An rgba32f texture the kernels write as storage and then read (sizes already checked
-/// against the device's limits by `x_texture_fits` / `w_texture_fits`).
+/// An rgba32f scratch texture the kernels write as storage and then read (sizes already
+/// checked against the device's limits by `x_texture_fits` / `w_texture_fits`).
 fn texture(gpu: &Gpu, size: [usize; 3], dim: wgpu::TextureDimension) -> (wgpu::TextureView, wgpu::TextureViewDimension) {
     let view = if dim == wgpu::TextureDimension::D3 { wgpu::TextureViewDimension::D3 } else { wgpu::TextureViewDimension::D2 };
-    let tex = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("conv_tex packed"),
-        size: wgpu::Extent3d { width: size[0] as u32, height: size[1] as u32, depth_or_array_layers: size[2] as u32 },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: dim,
-        format: wgpu::TextureFormat::Rgba32Float,
-        usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    });
-    (tex.create_view(&Default::default()), view)
+    (gpu.scratch_texture(size, dim), view)
 }
 
 /// Whether `ops` asks for textures and the device can run the texture kernels.
@@ -408,7 +398,7 @@ fn backward_weight_tex(
     let nchunks = 128usize.div_ceil(groups).clamp(1, rows);
     let chunk = rows.div_ceil(nchunks);
     let nchunks = rows.div_ceil(chunk);
-    let part = Tensor::zeros(gpu, &[nchunks, taps, cpad, copad])?;
+    let part = gpu.scratch(&[nchunks, taps, cpad, copad])?;
     let tiles = nchunks * groups;
     let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, total: tiles as u32, ..params(g, cpad) };
     let args = [xp.arg(), dyp.arg(), Arg::W(&part)];
@@ -449,7 +439,7 @@ pub(crate) fn backward_weight(
     let nchunks = 1024usize.div_ceil(columns).max((rows * g.output[2]).div_ceil(1024)).clamp(1, rows);
     let chunk = rows.div_ceil(nchunks);
     let nchunks = rows.div_ceil(chunk);
-    let part = Tensor::zeros(gpu, &[nchunks, taps, cpad, copad])?;
+    let part = gpu.scratch(&[nchunks, taps, cpad, copad])?;
     let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, ..params(g, cpad) };
     dispatch(gpu, pass, "conv_fast_backward_weight", p, &[Arg::R(&xp), Arg::R(&dyp), Arg::W(&part)], nchunks * columns)?;
     dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())

@@ -59,7 +59,7 @@ impl Loss {
         expect_shape(op, "target", target, pred.shape())?;
         expect_shape(op, "loss", loss, &[1])?;
         let n = pred.numel();
-        let terms = Tensor::zeros(gpu, pred.shape())?;
+        let terms = gpu.scratch(pred.shape())?;
         let args = [Arg::R(pred), Arg::R(target), Arg::W(&terms)];
         elementwise(gpu, pass, SHADER, entry, &Self::params(n), &args, n)?;
         reduce::sum_outer_inner(gpu, pass, &terms, [1, 1, n], 1.0 / n as f32, loss)
@@ -100,7 +100,7 @@ pub fn per_image_mse(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, a: &Tensor, b:
     let n = a.shape()[0];
     expect_shape(op, "mse", mse, &[n])?;
     let per = a.numel() / n;
-    let terms = Tensor::zeros(gpu, a.shape())?;
+    let terms = gpu.scratch(a.shape())?;
     let args = [Arg::R(a), Arg::R(b), Arg::W(&terms)];
     elementwise(gpu, pass, SHADER, "sq_diff", &Loss::params(a.numel()), &args, a.numel())?;
     reduce::sum_outer_inner(gpu, pass, &terms, [1, n, per], 1.0 / per as f32, mse)

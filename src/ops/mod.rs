@@ -20,6 +20,7 @@ pub mod prelu;
 pub mod projection;
 pub mod reduce;
 pub mod resample;
+pub mod resize_conv;
 pub mod sigmoid;
 
 use crate::error::{Result, shape_err};

@@ -126,9 +126,7 @@ impl Phong {
     }
 
     /// Writes the gradients of all four inputs into `grads` from the upstream gradient
-    /// `dimage` `[N, 3, H, W]`. A grey albedo's gradient sums the three colour channels;
-    /// the light's sums over pixels with the deterministic reduction, through an internal
-    /// `[N * 6, H * W]` scratch.
+    /// `dimage` `[N, 3, H, W]`: [`Phong::backward_maps`] then [`Phong::backward_light`].
     pub fn backward(
         &self,
         gpu: &Gpu,
@@ -137,17 +135,44 @@ impl Phong {
         dimage: &Tensor,
         grads: &Inputs,
     ) -> Result<()> {
+        x.check_grads("phong_backward", grads)?;
+        self.backward_maps(gpu, pass, x, dimage, [grads.normal, grads.albedo, grads.mask])?;
+        self.backward_light(gpu, pass, x, dimage, grads.light)
+    }
+
+    /// Writes the gradients of the normal, albedo and mask maps (in that order) from
+    /// `dimage`. A grey albedo's gradient sums the three colour channels.
+    pub fn backward_maps(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        x: &Inputs,
+        dimage: &Tensor,
+        [normal, albedo, mask]: [&Tensor; 3],
+    ) -> Result<()> {
         let op = "phong_backward";
         let dims @ [n, _, h, w] = x.dims(op)?;
         expect_shape(op, "image gradient", dimage, &[n, 3, h, w])?;
-        x.check_grads(op, grads)?;
+        expect_shape(op, "normal gradient", normal, x.normal.shape())?;
+        expect_shape(op, "albedo gradient", albedo, x.albedo.shape())?;
+        expect_shape(op, "mask gradient", mask, x.mask.shape())?;
         let p = self.params(op, dims)?;
-        let wg = grid_1d(p.n_pix as u64, 64)?;
-        let maps = backward_args(x, dimage, [Arg::W(grads.normal), Arg::W(grads.albedo), Arg::W(grads.mask)]);
-        gpu.dispatch(pass, SHADER, "phong_backward_maps", &p, &maps, wg)?;
-        let parts = Tensor::zeros(gpu, &[n * 6, h * w])?;
-        gpu.dispatch(pass, SHADER, "phong_backward_light", &p, &backward_args(x, dimage, [Arg::W(&parts)]), wg)?;
-        reduce::sum_outer_inner(gpu, pass, &parts, [1, n * 6, h * w], 1.0, grads.light)
+        let maps = backward_args(x, dimage, [Arg::W(normal), Arg::W(albedo), Arg::W(mask)]);
+        gpu.dispatch(pass, SHADER, "phong_backward_maps", &p, &maps, grid_1d(p.n_pix as u64, 64)?)
+    }
+
+    /// Writes the light's gradient `[N, 6]` from `dimage`: per-pixel partials in an internal
+    /// `[N * 6, H * W]` scratch, summed by the deterministic reduction. Callers that do not
+    /// want the light's gradient (training) skip it.
+    pub fn backward_light(&self, gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Inputs, dimage: &Tensor, light: &Tensor) -> Result<()> {
+        let op = "phong_backward";
+        let dims @ [n, _, h, w] = x.dims(op)?;
+        expect_shape(op, "image gradient", dimage, &[n, 3, h, w])?;
+        expect_shape(op, "light gradient", light, x.light.shape())?;
+        let p = self.params(op, dims)?;
+        let parts = gpu.scratch(&[n * 6, h * w])?;
+        gpu.dispatch(pass, SHADER, "phong_backward_light", &p, &backward_args(x, dimage, [Arg::W(&parts)]), grid_1d(p.n_pix as u64, 64)?)?;
+        reduce::sum_outer_inner(gpu, pass, &parts, [1, n * 6, h * w], 1.0, light)
     }
 }
 

@@ -52,7 +52,7 @@ pub fn backward(
         expect_shape("prelu", name, t, x.shape())?;
     }
     expect_shape("prelu", "dalpha", dalpha, alpha.shape())?;
-    let contrib = Tensor::zeros(gpu, x.shape())?;
+    let contrib = gpu.scratch(x.shape())?;
     let args = [Arg::R(x), Arg::R(alpha), Arg::R(dy), Arg::W(dx), Arg::W(&contrib)];
     gpu.dispatch(pass, SHADER, "prelu_backward", &params(d), &args, grid_1d(x.numel() as u64, 64)?)?;
     reduce::sum_outer_inner(gpu, pass, &contrib, d, 1.0, dalpha)

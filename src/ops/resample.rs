@@ -117,7 +117,7 @@ pub fn backward_pose(
     check_nc(op, "dy", dy, nc)?;
     expect_shape(op, "dpose", dpose, &[nc.0, POSE_LEN])?;
     let vo: usize = dy.shape()[2..].iter().product();
-    let scratch = Tensor::zeros(gpu, &[nc.0 * POSE_LEN, vo])?;
+    let scratch = gpu.scratch(&[nc.0 * POSE_LEN, vo])?;
     let params = Params::new(nc.0, nc.1, &x.shape()[2..], &dy.shape()[2..]);
     let args = [Arg::R(pose), Arg::R(x), Arg::R(dy), Arg::W(&scratch)];
     gpu.dispatch(pass, SHADER, "resample_backward_pose", &params, &args, grid_1d((nc.0 * vo) as u64, 64)?)?;

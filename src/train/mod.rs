@@ -131,6 +131,14 @@ fn crop_phase(gpu: &Gpu, cfg: &TrainConfig, head: Head, window: usize, from: Opt
     if let Some(ckpt) = from {
         ex.load_checkpoint(gpu, ckpt)?;
     }
+    // The transposed convs stay resize-convolutions ("nearest upsample + 3x3 conv"), which
+    // cannot grow a checkerboard, at the transposed conv's cost (see `graph::resize_conv`).
+    for v in net.graph.params() {
+        let info = net.graph.info(v);
+        if info.name.starts_with("up.") && info.name.ends_with(".weight") && info.shape[2..] == [4, 4] {
+            ex.keep_resize_conv(gpu, v)?;
+        }
+    }
     Ok(CropPhase { window, net, ex })
 }
 
@@ -187,9 +195,8 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
         feed(gpu, &cur, &b)?;
         let lr = exponential_decay(cfg.lr, cfg.decay, cfg.decay_steps, step, false);
         let ts = std::time::Instant::now();
-        cur.ex.train_step(gpu, cur.net.loss.expect("built with loss"), &Adam::new(lr))?;
-        keep_resize_convs(gpu, &cur)?;
-        let loss = cur.ex.read(gpu, cur.net.loss.expect("built with loss"))?[0];
+        let stats = cur.ex.train_step(gpu, cur.net.loss.expect("built with loss"), &Adam::new(lr))?;
+        let loss = stats.loss.expect("a training step reads its loss back");
         if !loss.is_finite() {
             return Err(Error::Invalid(format!("step {step}: the loss is {loss}; stopping before the weights go bad (last checkpoint: {})", cfg.out.display())));
         }
@@ -210,22 +217,6 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
         }
     }
     Ok(psnr)
-}
-
-/// Projects the transposed convs' weights (`up.*.weight`) back onto resize-convolutions
-/// after an optimiser step (see `graph::resize_conv`): they stay "nearest upsample + 3x3
-/// conv", which cannot grow a checkerboard, at the transposed conv's cost.
-fn keep_resize_convs(gpu: &Gpu, ph: &CropPhase) -> Result<()> {
-    let g = ph.ex.graph();
-    for v in g.params() {
-        let info = g.info(v);
-        if info.name.starts_with("up.") && info.name.ends_with(".weight") && info.shape[2..] == [4, 4] {
-            let mut w = ph.ex.read(gpu, v)?;
-            crate::graph::resize_conv::project(&mut w);
-            ph.ex.feed(gpu, v, &w)?;
-        }
-    }
-    Ok(())
 }
 
 fn feed(gpu: &Gpu, ph: &CropPhase, b: &Batch) -> Result<()> {

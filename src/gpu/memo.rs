@@ -1,0 +1,264 @@
+//! Per-graph reuse of what a recording creates: uniform blocks, bind groups, scratch buffers
+//! and textures. A graph records the same dispatches in the same order every step, so the
+//! k-th dispatch of one step can reuse the k-th dispatch's bind group of the last step, and
+//! the scratch an op takes can come from a pool the op hands back when it ends (the next op
+//! of the same encoder may reuse it: commands run in order).
+//!
+//! The executor installs its [`Memo`] for the duration of a run ([`Gpu::recording`]); ops
+//! never see it. Outside a recording, [`Gpu::dispatch`] makes a fresh uniform buffer and bind
+//! group per call and [`Gpu::scratch`] a fresh zeroed buffer, as one-off work wants.
+//!
+//! Uniform blocks live in 256-byte slots (wgpu's largest `min_uniform_buffer_offset_alignment`)
+//! of a few chunk buffers, bound with a dynamic offset; the recording's bytes are compared
+//! with what the chunks hold and only changed chunks are written, once, just before the
+//! submit (`queue.write_buffer` runs ahead of the submitted commands). The k-th bind group
+//! is reused only if the k-th dispatch binds the very same pipeline, parameter size and
+//! resources (wgpu's handles compare by identity, and the memo holds them, so an identity
+//! cannot be recycled while compared).
+
+use super::pool::Reuse;
+use super::{BufferPool, Gpu, Tensor};
+use crate::error::{Error, Result};
+use std::cell::{Cell, RefCell};
+
+/// Bytes per uniform slot.
+pub(crate) const SLOT: u64 = 256;
+/// Slots per uniform chunk buffer.
+const CHUNK_SLOTS: usize = 64;
+
+thread_local! {
+    /// The memo of the recording this thread is making, if any.
+    static ACTIVE: RefCell<Option<Memo>> = const { RefCell::new(None) };
+    /// GPU objects (buffers, textures, bind groups) this thread has created.
+    static CREATED: Cell<u64> = const { Cell::new(0) };
+}
+
+/// Counts one created GPU object (for [`Gpu::created_count`]).
+pub(crate) fn note_created() {
+    CREATED.with(|c| c.set(c.get() + 1));
+}
+
+/// GPU objects created by the calling thread so far.
+pub(crate) fn created() -> u64 {
+    CREATED.with(|c| c.get())
+}
+
+/// One resource of a bind group, compared by identity.
+#[derive(PartialEq)]
+enum Res {
+    Buffer(wgpu::Buffer),
+    View(wgpu::TextureView),
+    Absent,
+}
+
+struct Bind {
+    entry: (&'static str, &'static str),
+    size: u64,
+    resources: Vec<Res>,
+    group: wgpu::BindGroup,
+}
+
+/// Size and dimension of a scratch texture (rgba32f).
+type TexKey = ([usize; 3], wgpu::TextureDimension);
+
+/// What the recordings of one graph keep for the next (see the module note).
+#[derive(Default)]
+pub struct Memo {
+    binds: Vec<Bind>,
+    chunks: Vec<wgpu::Buffer>,
+    /// This recording's uniform blocks, slot after slot.
+    data: Vec<u8>,
+    /// What the chunk buffers hold.
+    written: Vec<u8>,
+    scratch: BufferPool,
+    live: Vec<Tensor>,
+    textures: Reuse<TexKey, wgpu::TextureView>,
+    live_textures: Vec<(TexKey, wgpu::TextureView)>,
+    texture_bytes: u64,
+}
+
+impl Memo {
+    /// Bytes of scratch buffers, scratch textures and uniform chunks this memo holds.
+    pub fn bytes(&self) -> u64 {
+        self.scratch.allocated_bytes() + self.texture_bytes + self.chunks.len() as u64 * SLOT * CHUNK_SLOTS as u64
+    }
+
+    /// The bind group and dynamic offset of the next dispatch, reusing the last recording's
+    /// when it bound the same things.
+    fn bind(
+        &mut self,
+        gpu: &Gpu,
+        entry: (&'static str, &'static str),
+        layout: &wgpu::BindGroupLayout,
+        params: &[u8],
+        args: &[super::Arg],
+    ) -> Result<(wgpu::BindGroup, u32)> {
+        if params.len() as u64 > SLOT {
+            return Err(Error::Invalid(format!("{}::{}: parameter block of {} bytes exceeds {SLOT}", entry.0, entry.1, params.len())));
+        }
+        let k = (self.data.len() as u64 / SLOT) as usize;
+        let chunk = k / CHUNK_SLOTS;
+        while self.chunks.len() <= chunk {
+            self.chunks.push(gpu.new_buffer("uniform chunk", SLOT * CHUNK_SLOTS as u64, wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST));
+        }
+        self.data.extend_from_slice(params);
+        self.data.resize((k + 1) * SLOT as usize, 0);
+        let resources: Vec<Res> = args.iter().map(|a| match a {
+            super::Arg::R(t) | super::Arg::W(t) => Res::Buffer(t.buffer().clone()),
+            super::Arg::Absent => Res::Absent,
+            super::Arg::Texture(v, _) | super::Arg::StorageTexture(v, _) => Res::View((*v).clone()),
+        }).collect();
+        let size = params.len() as u64;
+        let offset = ((k % CHUNK_SLOTS) as u64 * SLOT) as u32;
+        if let Some(b) = self.binds.get(k) {
+            if b.entry == entry && b.size == size && b.resources == resources {
+                return Ok((b.group.clone(), offset));
+            }
+        }
+        let uniform = wgpu::BufferBinding { buffer: &self.chunks[chunk], offset: 0, size: std::num::NonZeroU64::new(size) };
+        let group = gpu.bind_group(layout, uniform, args);
+        let b = Bind { entry, size, resources, group: group.clone() };
+        if k < self.binds.len() {
+            self.binds[k] = b;
+        } else {
+            self.binds.push(b);
+        }
+        Ok((group, offset))
+    }
+
+    /// Writes the uniform chunks whose bytes changed since they were last written.
+    fn flush(&mut self, gpu: &Gpu) {
+        let chunk_bytes = SLOT as usize * CHUNK_SLOTS;
+        if self.written.len() < self.data.len() {
+            // Fresh slots: force their chunk to be written.
+            self.written.resize(self.data.len(), 0xff);
+        }
+        for (c, range) in (0..self.data.len()).step_by(chunk_bytes).map(|s| s..(s + chunk_bytes).min(self.data.len())).enumerate() {
+            if self.written[range.clone()] != self.data[range.clone()] {
+                gpu.queue.write_buffer(&self.chunks[c], 0, &self.data[range.clone()]);
+                self.written[range.clone()].copy_from_slice(&self.data[range]);
+            }
+        }
+    }
+
+    /// Hands the scratch of the op that just ended back to the pools.
+    fn op_done(&mut self) {
+        for t in self.live.drain(..) {
+            self.scratch.release(t);
+        }
+        for (k, v) in self.live_textures.drain(..) {
+            self.textures.put(k, v);
+        }
+    }
+}
+
+impl Gpu {
+    /// Runs `f` (which records one graph run and submits it) with `memo` installed: the
+    /// dispatches and scratch of `f` reuse what the memo kept from the last run and leave
+    /// what they create in it.
+    pub fn recording<T>(&self, memo: &mut Memo, f: impl FnOnce() -> T) -> T {
+        struct Restore<'a>(&'a mut Memo, Option<Memo>);
+        impl Drop for Restore<'_> {
+            fn drop(&mut self) {
+                let mut m = ACTIVE.with(|a| a.replace(self.1.take())).unwrap_or_default();
+                m.op_done();
+                m.data.clear();
+                *self.0 = m;
+            }
+        }
+        let mut m = std::mem::take(memo);
+        m.data.clear();
+        m.scratch.begin_run();
+        m.textures.begin_run();
+        let prev = ACTIVE.with(|a| a.replace(Some(m)));
+        let _restore = Restore(memo, prev);
+        f()
+    }
+
+    /// A scratch tensor for the op being recorded. Inside a [`Gpu::recording`] it comes from
+    /// the memo's pool with undefined contents (the kernel must write all it reads) and goes
+    /// back when the executor calls [`op_done`]; otherwise it is a fresh zeroed tensor.
+    pub fn scratch(&self, shape: &[usize]) -> Result<Tensor> {
+        let pooled = ACTIVE.with(|a| {
+            a.borrow_mut().as_mut().map(|m| {
+                let t = m.scratch.tensor(self, shape)?;
+                m.live.push(t.clone());
+                Ok(t)
+            })
+        });
+        pooled.unwrap_or_else(|| Tensor::zeros(self, shape))
+    }
+
+    /// An rgba32f texture of `size` (width, height, depth or layers) the op being recorded
+    /// writes as storage and then samples; pooled like [`Gpu::scratch`].
+    pub(crate) fn scratch_texture(&self, size: [usize; 3], dim: wgpu::TextureDimension) -> wgpu::TextureView {
+        let key = (size, dim);
+        let make = || {
+            note_created();
+            let tex = self.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("scratch texture"),
+                size: wgpu::Extent3d { width: size[0] as u32, height: size[1] as u32, depth_or_array_layers: size[2] as u32 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: dim,
+                format: wgpu::TextureFormat::Rgba32Float,
+                usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            });
+            tex.create_view(&Default::default())
+        };
+        ACTIVE.with(|a| match a.borrow_mut().as_mut() {
+            Some(m) => {
+                let view = m.textures.take_or(key, || {
+                    m.texture_bytes += size.iter().product::<usize>() as u64 * 16;
+                    make()
+                });
+                m.live_textures.push((key, view.clone()));
+                view
+            }
+            None => make(),
+        })
+    }
+
+    /// The bind group and dynamic offset of a dispatch: the memo's inside a recording, else
+    /// `None` (the caller makes a one-off uniform buffer).
+    pub(crate) fn memo_bind(
+        &self,
+        entry: (&'static str, &'static str),
+        layout: &wgpu::BindGroupLayout,
+        params: &[u8],
+        args: &[super::Arg],
+    ) -> Option<Result<(wgpu::BindGroup, u32)>> {
+        ACTIVE.with(|a| a.borrow_mut().as_mut().map(|m| m.bind(self, entry, layout, params, args)))
+    }
+
+    /// Writes the active recording's changed uniform blocks (called right before a submit).
+    pub(crate) fn flush_memo(&self) {
+        ACTIVE.with(|a| {
+            if let Some(m) = a.borrow_mut().as_mut() {
+                m.flush(self);
+            }
+        });
+    }
+
+    /// A buffer, counted in [`Gpu::created_count`].
+    pub(crate) fn new_buffer(&self, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        note_created();
+        self.device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
+    }
+
+    /// GPU objects (buffers, textures, bind groups) the calling thread has created on any
+    /// device: a step's count is its own even while other threads share the device.
+    pub fn created_count(&self) -> u64 {
+        created()
+    }
+}
+
+/// Ends the current op of the active recording: its scratch may serve the next op.
+pub(crate) fn op_done() {
+    ACTIVE.with(|a| {
+        if let Some(m) = a.borrow_mut().as_mut() {
+            m.op_done();
+        }
+    });
+}
