@@ -37,6 +37,8 @@ enum Cmd {
     /// Redraw a training run's curve (loss and held-out PSNR against step) from its
     /// `<out>.log.csv`.
     Curve(cli::train::CurveArgs),
+    /// Train the 3D shape autoencoder used as a shape prior by inverse rendering.
+    TrainPrior(cli::prior::TrainPriorArgs),
     /// Recover the camera pose and the light from one image of a known shape, by gradient
     /// descent through the frozen network (coarse silhouette search, then Adam on the best
     /// starts). Without --image, the target is rendered from the scene flags and the errors
@@ -80,6 +82,7 @@ fn main() -> ExitCode {
         Cmd::Render(a) => cli::render::run(a),
         Cmd::Eval(a) => cli::eval::run(a),
         Cmd::Curve(a) => cli::train::run_curve(a),
+        Cmd::TrainPrior(a) => cli::prior::run(a),
         Cmd::Bench(a) => cli::bench::run(a),
         Cmd::Invert(a) => cli::invert::run(a),
         Cmd::Stress(a) => cli::stress::run(a),

@@ -425,3 +425,25 @@ fn stress_unseen_scores_every_shape_file_of_a_folder() {
     assert!(!out.status.success() && err.contains("--unseen") && err.contains("no .binvox"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `train-prior` trains the shape autoencoder on a dataset's grids: it writes the checkpoint
+/// and the weights, reports a held-out IoU in 0..1, resumes from its checkpoint, and refuses
+/// to overwrite a checkpoint without --resume or --force.
+#[test]
+fn train_prior_trains_resumes_and_reports_iou() {
+    let dir = std::env::temp_dir().join(format!("rendernet-cli-prior-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let (data, ckpt) = (dir.join("data"), dir.join("prior.ckpt"));
+    let (d, c) = (data.to_str().unwrap(), ckpt.to_str().unwrap());
+    run_ok(&["dataset", "--count", "2", "--views", "2", "--res", "16", "--image", "32", "--seed", "5", "--out", d]);
+    let common = ["--data", d, "--out", c, "--batch", "2", "--eval-every", "2", "--eval-samples", "2"];
+    let out = run_ok(&[&["train-prior", "--steps", "2"][..], &common[..]].concat());
+    let iou: f64 = out.lines().find_map(|l| l.strip_prefix("final held-out IoU ")).and_then(|r| r.split(';').next()).unwrap_or_else(|| panic!("{out}")).parse().unwrap();
+    assert!((0.0..=1.0).contains(&iou), "{out}");
+    assert!(ckpt.exists() && ckpt.with_extension("weights.safetensors").exists());
+    let again = rendernet().args([&["train-prior", "--steps", "2"][..], &common[..]].concat()).output().unwrap();
+    assert!(!again.status.success() && String::from_utf8_lossy(&again.stderr).contains("--resume"));
+    let out = run_ok(&[&["train-prior", "--steps", "4", "--resume", c][..], &common[..]].concat());
+    assert!(out.contains("step 4/4"), "{out}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -11,3 +11,4 @@ pub mod phong;
 pub mod projection;
 pub mod resample;
 pub mod resize_conv;
+pub mod concat;

@@ -7,6 +7,7 @@ pub mod frontier;
 pub mod info;
 pub mod invert;
 pub mod output;
+pub mod prior;
 pub mod render;
 pub mod stress;
 pub mod train;

@@ -10,8 +10,8 @@ use std::path::PathBuf;
 /// Train RenderNet on a dataset from `rendernet dataset`.
 #[derive(Args)]
 pub struct TrainArgs {
-    /// Network size: nano (fastest), tiny (the shipped one; both train on a CPU through lavapipe) or
-    /// paper (the appendix; real GPUs).
+    /// Network size, smallest first: nano, tiny (the default render's), small, base (all
+    /// train on a CPU through lavapipe; base slowly), or paper (the appendix; real GPUs).
     #[arg(long, default_value = "tiny")]
     preset: String,
     /// Dataset directory (its manifest decides the shader: phong trains the normal, albedo and

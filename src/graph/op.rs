@@ -14,6 +14,8 @@
 //! | `Resample(out)` | x[N,C,D,H,W], pose[N,6] | x, pose |
 //! | `Phong` | normal[N,3,H,W], albedo[N,C,H,W], mask[N,1,H,W], light[N,6] | all four |
 //! | `Loss` | prediction, target (no gradient) | both |
+//! | `Concat` | a[N,C1,S..], b[N,C2,S..] | nothing |
+//! | `Reshape(shape)` | x (same size as `shape`) | nothing |
 
 use crate::error::{Result, shape_err};
 use crate::gpu::{Gpu, Tensor};
@@ -47,6 +49,11 @@ pub enum Op {
     Phong(Phong),
     /// A scalar loss `[1]` of a prediction against a target.
     Loss(Loss),
+    /// Concatenation of two values along axis 1 (channels).
+    Concat,
+    /// The same values in another shape of the same size (row-major order kept): from a
+    /// conv's `[N, C, D, H, W]` to a fully-connected layer's `[N, K, 1, 1]` and back.
+    Reshape(Vec<usize>),
 }
 
 /// What a node's forward or backward gets to work with.
@@ -74,13 +81,15 @@ impl Op {
             Op::Phong(_) => "phong",
             Op::Loss(Loss::Mse) => "mse",
             Op::Loss(Loss::Bce) => "bce",
+            Op::Concat => "concat",
+            Op::Reshape(_) => "reshape",
         }
     }
 
     fn arity(&self) -> usize {
         match self {
-            Op::Sigmoid | Op::Elu(_) | Op::Dropout(_) => 1,
-            Op::Prelu | Op::Add | Op::Loss(_) | Op::Resample(_) => 2,
+            Op::Sigmoid | Op::Elu(_) | Op::Dropout(_) | Op::Reshape(_) => 1,
+            Op::Prelu | Op::Add | Op::Loss(_) | Op::Resample(_) | Op::Concat => 2,
             Op::Projection | Op::Conv(_) | Op::ConvTranspose(_) => 3,
             Op::Phong(_) => 4,
         }
@@ -135,6 +144,13 @@ impl Op {
                 }
                 Ok(vec![1])
             }
+            Op::Concat => ops::concat::output_shape(s),
+            Op::Reshape(to) => {
+                if to.iter().product::<usize>() != s[0].iter().product::<usize>() || to.contains(&0) {
+                    return Err(shape_err("reshape", format!("{:?} cannot become {to:?}: the sizes differ", s[0])));
+                }
+                Ok(to.clone())
+            }
         }
     }
 
@@ -162,7 +178,7 @@ impl Op {
             Op::Sigmoid => (&[], true),
             Op::Elu(_) => (&[0], false),
             Op::Prelu => (&[0, 1], false),
-            Op::Dropout(_) | Op::Add => (&[], false),
+            Op::Dropout(_) | Op::Add | Op::Concat | Op::Reshape(_) => (&[], false),
             Op::Projection => (&[0, 1], false),
             Op::Resample(_) | Op::Conv(_) | Op::ConvTranspose(_) => (&[0, 1], false),
             Op::Phong(_) => (&[0, 1, 2, 3], false),
@@ -192,6 +208,8 @@ impl Op {
             Op::Resample(_) => ops::resample::forward(g, p, x[0], x[1], y),
             Op::Phong(ph) => ph.forward(g, p, &phong_inputs(x), y),
             Op::Loss(l) => l.forward(g, p, x[0], x[1], y),
+            Op::Concat => ops::concat::forward(g, p, x, y),
+            Op::Reshape(_) => ops::add::reshape(g, p, x[0], y),
         }
     }
 
@@ -243,6 +261,23 @@ impl Op {
                 some(dx[3], |d| ph.backward_light(g, p, &phong_inputs(x), dy, d))
             }
             Op::Loss(l) => some(dx[0], |d| l.backward(g, p, x[0], x[1], dy, d)),
+            Op::Concat => {
+                // Inputs are not saved (`x` may hold stand-ins): the parts' shapes follow from
+                // dy and whichever gradient is asked for.
+                let mut shapes = [dy.shape().to_vec(), dy.shape().to_vec()];
+                match (dx[0], dx[1]) {
+                    (Some(a), _) => shapes[1][1] -= a.shape()[1],
+                    (None, Some(b)) => shapes[0][1] -= b.shape()[1],
+                    (None, None) => return Ok(()),
+                }
+                if let Some(a) = dx[0] {
+                    shapes[0][1] = a.shape()[1];
+                } else if let Some(b) = dx[1] {
+                    shapes[1][1] = b.shape()[1];
+                }
+                ops::concat::backward(g, p, dy, &[&shapes[0], &shapes[1]], dx)
+            }
+            Op::Reshape(_) => some(dx[0], |d| ops::add::reshape(g, p, dy, d)),
         }
     }
 }

@@ -2,5 +2,6 @@
 //! tie its resampling to the reference renderer's images.
 
 pub mod camera;
+pub mod prior;
 pub mod render;
 pub mod rendernet;

@@ -132,16 +132,17 @@ pub struct RenderNet {
     pub loss: Option<Value>,
 }
 
-struct Builder<'a> {
-    g: &'a mut Graph,
+/// Adds named layers (weights and biases as parameters) to a graph; shared by the models.
+pub(crate) struct Builder<'a> {
+    pub(crate) g: &'a mut Graph,
 }
 
 impl Builder<'_> {
-    fn param(&mut self, name: &str, shape: &[usize], init: Init) -> Result<Value> {
+    pub(crate) fn param(&mut self, name: &str, shape: &[usize], init: Init) -> Result<Value> {
         self.g.param(name, shape, init)
     }
 
-    fn conv(&mut self, name: &str, x: Value, cout: usize, conv: Conv) -> Result<Value> {
+    pub(crate) fn conv(&mut self, name: &str, x: Value, cout: usize, conv: Conv) -> Result<Value> {
         let cin = self.g.info(x).shape[1];
         let mut wshape = vec![cout, cin];
         let rank = self.g.info(x).shape.len();
@@ -149,6 +150,26 @@ impl Builder<'_> {
         let w = self.param(&format!("{name}.weight"), &wshape, Init::Xavier)?;
         let b = self.param(&format!("{name}.bias"), &[cout], Init::Constant(0.001))?;
         self.g.apply(name, Op::Conv(conv), &[x, w, b])
+    }
+
+    /// A transposed conv `t` with PyTorch's `[Cin, Cout, k...]` weights (Xavier).
+    pub(crate) fn conv_transpose(&mut self, name: &str, x: Value, cout: usize, t: ConvTranspose) -> Result<Value> {
+        let cin = self.g.info(x).shape[1];
+        let rank = self.g.info(x).shape.len();
+        let mut wshape = vec![cin, cout];
+        wshape.extend(&t.conv.kernel[5 - rank..]);
+        let w = self.param(&format!("{name}.weight"), &wshape, Init::Xavier)?;
+        let b = self.param(&format!("{name}.bias"), &[cout], Init::Constant(0.001))?;
+        self.g.apply(name, Op::ConvTranspose(t), &[x, w, b])
+    }
+
+    /// A fully-connected layer on `[N, K, 1, 1]`: the projection op with weights `[O, K, 1, 1]`
+    /// (PyTorch's Linear `[O, K]` with two unit axes).
+    pub(crate) fn dense(&mut self, name: &str, x: Value, out: usize) -> Result<Value> {
+        let k = self.g.info(x).shape[1];
+        let w = self.param(&format!("{name}.weight"), &[out, k, 1, 1], Init::Xavier)?;
+        let b = self.param(&format!("{name}.bias"), &[out], Init::Constant(0.001))?;
+        self.g.apply(name, Op::Projection, &[x, w, b])
     }
 
     fn up(&mut self, name: &str, x: Value, cout: usize) -> Result<Value> {

@@ -36,3 +36,13 @@ pub fn copy(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, src: &Tensor, dst: &Ten
     let n = src.numel();
     elementwise(gpu, pass, SHADER, "add_copy", &Params { n: n as u32 }, &[Arg::R(src), Arg::W(dst)], n)
 }
+
+/// `dst = src` with another shape of the same size (a reshape: memory is row-major, so the
+/// values keep their order).
+pub fn reshape(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, src: &Tensor, dst: &Tensor) -> Result<()> {
+    if dst.numel() != src.numel() {
+        return Err(crate::error::shape_err("reshape", format!("{:?} and {:?} differ in size", src.shape(), dst.shape())));
+    }
+    let n = src.numel();
+    gpu.dispatch(pass, SHADER, "add_copy", &Params { n: n as u32 }, &[Arg::R(src), Arg::W(dst)], crate::gpu::grid_1d(n as u64, 64)?)
+}

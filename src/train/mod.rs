@@ -5,6 +5,7 @@ pub mod batch;
 pub mod eval;
 pub mod lr;
 pub mod plot;
+pub mod prior;
 
 use crate::data::{Dataset, Split};
 use crate::error::{Error, Result};

@@ -1,0 +1,32 @@
+// Concatenation along the channel axis (axis 1), one part per dispatch: the part
+// x [N, Cp, S] occupies channels c0 .. c0 + Cp of y [N, Cy, S] (S = the product of the
+// spatial axes, 1 for vectors [N, C]). Forward places a part into the whole; backward
+// takes a part's gradient out of dy (concatenation is a permutation of copies, so its
+// backward is the same copy the other way round).
+
+struct Params { n: u32, cp: u32, cy: u32, s: u32, c0: u32 }
+@group(0) @binding(0) var<uniform> p: Params;
+@group(0) @binding(1) var<storage, read> src: array<f32>;
+@group(0) @binding(2) var<storage, read_write> dst: array<f32>;
+
+// Index in the whole of element i of the part.
+fn whole(i: u32) -> u32 {
+    let s = i % p.s;
+    let c = (i / p.s) % p.cp;
+    let n = i / (p.s * p.cp);
+    return (n * p.cy + p.c0 + c) * p.s + s;
+}
+
+@compute @workgroup_size(64)
+fn concat_forward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    if (i >= p.n * p.cp * p.s) { return; }
+    dst[whole(i)] = src[i];
+}
+
+@compute @workgroup_size(64)
+fn concat_backward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    if (i >= p.n * p.cp * p.s) { return; }
+    dst[i] = src[whole(i)];
+}

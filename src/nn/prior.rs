@@ -1,0 +1,95 @@
+//! The 3D shape autoencoder the paper trains as a shape prior for inverse rendering
+//! (appendix, "3D shape autoencoder"): strided 3D convs, a fully-connected layer to a
+//! latent code squashed by a sigmoid, a fully-connected layer back to a small grid, and 3D
+//! transposed convs up to the input resolution, ELU between layers and a sigmoid at the end.
+//! Inverse rendering searches the code and renders the decoded grid (MAP with the decoder
+//! as the prior). Sizes are scaled to the 32^3 grids trained here (the paper: 64^3, 200
+//! latents, 64-512 channels).
+
+use super::rendernet::Builder;
+use crate::error::{Error, Result};
+use crate::graph::{Graph, Op, Value};
+use crate::ops::conv::{Conv, Padding};
+use crate::ops::conv_transpose::ConvTranspose;
+use crate::ops::loss::Loss;
+
+/// Sizes of a shape autoencoder.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PriorPreset {
+    /// Name, for messages and files.
+    pub name: &'static str,
+    /// Grid side (a multiple of 16: four stride-2 convs, the decoder starts at `res / 8`).
+    pub res: usize,
+    /// Channels of the four encoder convs (kernels 5, 5, 2, 2, stride 2 each, as the paper).
+    pub enc: [usize; 4],
+    /// Latent code length.
+    pub latent: usize,
+    /// Channels of the decoder's starting grid and of its three stride-2 transposed convs.
+    pub dec: [usize; 4],
+}
+
+impl PriorPreset {
+    /// The size trained here: 32^3 grids, a 64-number code.
+    pub fn small() -> PriorPreset {
+        PriorPreset { name: "prior-small", res: 32, enc: [8, 16, 32, 64], latent: 64, dec: [32, 16, 8, 8] }
+    }
+}
+
+/// A built autoencoder and the values a caller feeds and reads.
+pub struct ShapePrior {
+    /// The graph.
+    pub graph: Graph,
+    /// Input occupancy `[N, 1, R, R, R]` (values in 0..1), also the reconstruction target.
+    pub grid: Value,
+    /// The latent code `[N, L, 1, 1]` (after the sigmoid).
+    pub code: Value,
+    /// Reconstructed occupancy probabilities `[N, 1, R, R, R]`.
+    pub recon: Value,
+    /// BCE of the reconstruction against the input, when built with a loss.
+    pub loss: Option<Value>,
+}
+
+impl ShapePrior {
+    /// The autoencoder for batch `n`; with `with_loss`, BCE(recon, grid).
+    pub fn build(p: &PriorPreset, n: usize, with_loss: bool) -> Result<ShapePrior> {
+        if p.res % 16 != 0 || p.res == 0 {
+            return Err(Error::Invalid(format!("prior grid side {} must be a positive multiple of 16", p.res)));
+        }
+        let mut g = Graph::new();
+        let mut b = Builder { g: &mut g };
+        let r = p.res;
+        let grid = b.g.input("grid", &[n, 1, r, r, r])?;
+        let mut x = grid;
+        for (i, (&c, k)) in p.enc.iter().zip([5, 5, 2, 2]).enumerate() {
+            x = b.conv(&format!("enc.conv{i}"), x, c, Conv::conv3d([k; 3], [2; 3], Padding::Same))?;
+            x = b.g.apply(&format!("enc.act{i}"), Op::Elu(1.0), &[x])?;
+        }
+        let flat = p.enc[3] * (r / 16).pow(3);
+        x = b.g.apply("enc.flat", Op::Reshape(vec![n, flat, 1, 1]), &[x])?;
+        x = b.dense("enc.fc", x, p.latent)?;
+        let code = b.g.apply("code", Op::Sigmoid, &[x])?;
+        let s = r / 8;
+        x = b.dense("dec.fc", code, p.dec[0] * s * s * s)?;
+        x = b.g.apply("dec.fc.act", Op::Elu(1.0), &[x])?;
+        x = b.g.apply("dec.grid", Op::Reshape(vec![n, p.dec[0], s, s, s]), &[x])?;
+        for (i, &c) in p.dec[1..].iter().enumerate() {
+            x = b.conv_transpose(&format!("dec.up{i}"), x, c, ConvTranspose::conv3d([4; 3], [2; 3], Padding::Same))?;
+            x = b.g.apply(&format!("dec.act{i}"), Op::Elu(1.0), &[x])?;
+        }
+        x = b.conv("dec.out", x, 1, Conv::conv3d([3; 3], [1; 3], Padding::Same))?;
+        let recon = g.apply("recon", Op::Sigmoid, &[x])?;
+        let loss = if with_loss { Some(g.apply("loss", Op::Loss(Loss::Bce), &[recon, grid])?) } else { None };
+        Ok(ShapePrior { graph: g, grid, code, recon, loss })
+    }
+}
+
+/// Intersection over union of two occupancy grids thresholded at 0.5 (1 when both are empty).
+pub fn iou(a: &[f32], b: &[f32]) -> f64 {
+    let (mut inter, mut uni) = (0usize, 0usize);
+    for (&x, &y) in a.iter().zip(b) {
+        let (p, q) = (x > 0.5, y > 0.5);
+        inter += (p && q) as usize;
+        uni += (p || q) as usize;
+    }
+    if uni == 0 { 1.0 } else { inter as f64 / uni as f64 }
+}
