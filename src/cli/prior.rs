@@ -2,10 +2,9 @@
 //! bar, checkpoints and held-out IoU.
 
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
 use rendernet::nn::prior::PriorPreset;
 use rendernet::train::prior::{PriorConfig, train_prior};
-use rendernet::{Error, Gpu, Result};
+use rendernet::{Gpu, Result};
 use std::path::PathBuf;
 
 /// Train the shape prior on a dataset's grids.
@@ -46,12 +45,7 @@ pub struct TrainPriorArgs {
 
 /// Runs prior training with a progress bar (a line per 100 steps without a terminal).
 pub fn run(a: TrainPriorArgs) -> Result<()> {
-    if a.resume.is_none() && !a.force && a.out.exists() {
-        return Err(Error::Invalid(format!(
-            "--out {}: the file exists; pass --resume {0} to continue it, or --force to start over",
-            a.out.display()
-        )));
-    }
+    super::train::refuse_overwrite(&a.out, a.resume.is_some(), a.force)?;
     let cfg = PriorConfig {
         preset: PriorPreset::small(),
         data: a.data,
@@ -65,8 +59,7 @@ pub fn run(a: TrainPriorArgs) -> Result<()> {
         eval_samples: a.eval_samples,
     };
     let gpu = Gpu::new()?;
-    let bar = ProgressBar::new(cfg.steps);
-    bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} [{elapsed_precise}<{eta_precise}] {msg}").expect("static template"));
+    let bar = super::train::step_bar(cfg.steps);
     let mut ema = None::<f32>;
     let mut last = String::from("-");
     let iou = train_prior(&gpu, &cfg, |step, loss, iou| {

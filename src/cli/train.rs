@@ -67,17 +67,29 @@ pub struct TrainArgs {
     augment_salt: f64,
 }
 
-/// Runs training, drawing a progress bar with loss and images/s.
-pub fn run(a: TrainArgs) -> Result<()> {
-    // A fresh run over an existing checkpoint would replace hours of training at its first
-    // evaluation; --resume continues it (same file or not), --force says the loss is meant.
-    if a.resume.is_none() && !a.force && a.out.exists() {
+/// A fresh run over an existing checkpoint would replace hours of training at its first
+/// evaluation; --resume continues it (same file or not), --force says the loss is meant.
+pub(crate) fn refuse_overwrite(out: &std::path::Path, resume: bool, force: bool) -> Result<()> {
+    if !resume && !force && out.exists() {
         return Err(Error::Invalid(format!(
             "--out {}: the file exists (a checkpoint of an earlier run?); pass --resume {0} to continue it, \
              or --force to overwrite it with a fresh run",
-            a.out.display()
+            out.display()
         )));
     }
+    Ok(())
+}
+
+/// The progress bar of a training run of `steps` steps (hidden without a terminal).
+pub(crate) fn step_bar(steps: u64) -> ProgressBar {
+    let bar = ProgressBar::new(steps);
+    bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} [{elapsed_precise}<{eta_precise}] {msg}").expect("static template"));
+    bar
+}
+
+/// Runs training, drawing a progress bar with loss and images/s.
+pub fn run(a: TrainArgs) -> Result<()> {
+    refuse_overwrite(&a.out, a.resume.is_some(), a.force)?;
     let cfg = TrainConfig {
         preset: Preset::by_name(&a.preset)?,
         data: a.data,
@@ -95,11 +107,7 @@ pub fn run(a: TrainArgs) -> Result<()> {
         augment: Augment { dropout: a.augment_dropout, salt: a.augment_salt },
     };
     let gpu = Gpu::new()?;
-    let bar = ProgressBar::new(cfg.steps);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:30} {pos}/{len} [{elapsed_precise}<{eta_precise}] {msg}")
-            .expect("static template"),
-    );
+    let bar = step_bar(cfg.steps);
     let mut ema = None::<f32>;
     let mut last_psnr = String::from("-");
     let psnr = train(&gpu, &cfg, |p| match p {
