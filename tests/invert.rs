@@ -70,3 +70,66 @@ fn invert_cli_reports_a_pose_and_rejects_a_wrong_image_size() {
     assert_eq!((png.width(), png.height()), (256, 128));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Shape recovery's graph: the shape prior's decoder in front of RenderNet. The gradient of
+/// the image loss with respect to the latent code (through the decoder, the resampling and
+/// the whole network) against central finite differences of the same loss, on three code
+/// entries; the decoder is an untrained (seeded) one, RenderNet the shipped weights, both
+/// loaded into one executor from their own files. Tolerance 10%: the code moves the grid
+/// smoothly (sigmoid decoder), so the differences matched to 0.1% and 2% when written; a
+/// gradient that skipped the decoder or the resampling would be off by orders of magnitude.
+#[test]
+fn shape_code_gradient_matches_finite_differences() {
+    use rendernet::graph::{Executor, Op};
+    use rendernet::nn::camera::{light_values, pose_for_view};
+    use rendernet::nn::prior::{PriorPreset, ShapePrior, decoder_with_renderer};
+    use rendernet::nn::rendernet::{Head, phong_of};
+    use rendernet::ops::loss::Loss;
+    let gpu = Gpu::new().unwrap();
+    let (pp, rp) = (PriorPreset::small(), Preset::tiny());
+    let prior = Executor::new(&gpu, ShapePrior::build(&pp, 1, false).unwrap().graph, 7).unwrap();
+    let file = std::env::temp_dir().join(format!("rendernet-prior-test-{}.safetensors", std::process::id()));
+    prior.save_params(&gpu, &file).unwrap();
+    let prior_bytes = std::fs::read(&file).unwrap();
+    let _ = std::fs::remove_file(&file);
+    let (mut net, code) = decoder_with_renderer(&pp, &rp, Head::Phong(phong_of(&Light::default())), 1, [32, 32]).unwrap();
+    let [h, w] = [net.graph.info(net.image).shape[2], net.graph.info(net.image).shape[3]];
+    let target = net.graph.input("target", &[1, 3, h, w]).unwrap();
+    let loss = net.graph.apply("loss", Op::Loss(Loss::Mse), &[net.image, target]).unwrap();
+    let mut ex = Executor::new(&gpu, net.graph.clone(), 0).unwrap();
+    ex.load_params_parts(&gpu, &[(TINY_PHONG_WEIGHTS, "tiny", ""), (&prior_bytes, "prior", "dec.")]).unwrap();
+    // Both files whole would clash on nothing but leave the prior's encoder unexpected.
+    let err = ex.load_params_parts(&gpu, &[(TINY_PHONG_WEIGHTS, "tiny", ""), (&prior_bytes, "prior", "")]).unwrap_err().to_string();
+    assert!(err.contains("unexpected 'enc.conv0.weight'"), "{err}");
+    ex.freeze_params();
+    ex.want_grad(code);
+    ex.keep(loss);
+    ex.training = false;
+    let view = View { azimuth: 30.0, elevation: 70.0, radius: 3.3 };
+    ex.feed(&gpu, net.pose, &pose_for_view(&view, rp.input, rp.cam, Some([16, 16, 32, 32]))).unwrap();
+    ex.feed(&gpu, net.light.unwrap(), &light_values(&Light::default())).unwrap();
+    ex.feed(&gpu, target, &vec![0.3; 3 * h * w]).unwrap();
+    let z: Vec<f32> = (0..pp.latent).map(|i| 0.3 + 0.4 * ((i * 37 % 64) as f32 / 64.0)).collect();
+    let loss_at = |ex: &mut Executor, z: &[f32]| {
+        ex.feed(&gpu, code, z).unwrap();
+        ex.forward(&gpu).unwrap();
+        ex.read(&gpu, loss).unwrap()[0] as f64
+    };
+    ex.feed(&gpu, code, &z).unwrap();
+    ex.backward(&gpu, loss).unwrap();
+    let g: Vec<f64> = ex.grad(&gpu, code).unwrap().iter().map(|&v| v as f64).collect();
+    // Single code entries move an f32 loss by less than its rounding; directional
+    // derivatives gather all 64: along the gradient itself (its norm) and along a fixed
+    // mixed-sign direction (the dot product with the gradient).
+    let norm = g.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let mixed: Vec<f64> = (0..pp.latent).map(|i| if i % 3 == 0 { 1.0 } else { -0.5 } / (pp.latent as f64).sqrt()).collect();
+    let step = 0.1;
+    for (name, dir) in [("gradient direction", g.iter().map(|v| v / norm).collect::<Vec<_>>()), ("mixed direction", mixed)] {
+        let at = |s: f64| z.iter().zip(&dir).map(|(&a, d)| (a as f64 + s * d) as f32).collect::<Vec<f32>>();
+        let fd = (loss_at(&mut ex, &at(step)) - loss_at(&mut ex, &at(-step))) / (2.0 * step);
+        let analytic: f64 = g.iter().zip(&dir).map(|(a, d)| a * d).sum();
+        eprintln!("{name}: analytic {analytic:.3e}, finite difference {fd:.3e}");
+        assert!(fd.abs() > 1e-7, "{name}: the loss does not move ({fd:e}); the test would prove nothing");
+        assert!((analytic - fd).abs() <= 0.1 * fd.abs(), "{name}: analytic {analytic} vs finite difference {fd}");
+    }
+}

@@ -161,12 +161,29 @@ impl Executor {
 
     /// [`Executor::load_params`] on safetensors bytes (e.g. weights embedded in the binary).
     pub fn load_params_bytes(&mut self, gpu: &Gpu, bytes: &[u8], name: &str) -> Result<()> {
-        let (mut file, mut bad, _) = decode(bytes, name)?;
-        // A checkpoint passed where weights are expected: its parameters serve as they are;
-        // the optimizer state is of no use outside training, so it is not "unexpected".
-        file.retain(|k, _| !is_adam_state(k));
-        bad.retain(|k, _| !is_adam_state(k));
-        self.take_params(gpu, Path::new(name), &mut file, &bad)
+        self.load_params_parts(gpu, &[(bytes, name, "")])
+    }
+
+    /// Loads the parameters of a graph made of several trained models from their files:
+    /// each `(bytes, name, prefix)` gives the tensors whose names start with `prefix` (""
+    /// for all), e.g. RenderNet's weights and a shape prior's `dec.` decoder. Together they
+    /// must hold every parameter exactly once, as [`Executor::load_params_bytes`] checks.
+    pub fn load_params_parts(&mut self, gpu: &Gpu, parts: &[(&[u8], &str, &str)]) -> Result<()> {
+        let (mut file, mut bad) = (BTreeMap::new(), BTreeMap::new());
+        for &(bytes, name, prefix) in parts {
+            let (f, b, _) = decode(bytes, name)?;
+            // A checkpoint passed where weights are expected: its parameters serve as they
+            // are; the optimizer state is of no use outside training, so it is not "unexpected".
+            let keep = |k: &String| !is_adam_state(k) && k.starts_with(prefix);
+            for (k, v) in f.into_iter().filter(|(k, _)| keep(k)) {
+                if file.insert(k.clone(), v).is_some() {
+                    return Err(Error::Invalid(format!("{name}: '{k}' is also in an earlier file")));
+                }
+            }
+            bad.extend(b.into_iter().filter(|(k, _)| keep(k)));
+        }
+        let label = parts.iter().map(|p| p.1).collect::<Vec<_>>().join(" + ");
+        self.take_params(gpu, Path::new(&label), &mut file, &bad)
     }
 
     /// Feeds every parameter from `file`, which must hold exactly the parameters (a name in

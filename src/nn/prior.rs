@@ -39,7 +39,8 @@ impl PriorPreset {
 pub struct ShapePrior {
     /// The graph.
     pub graph: Graph,
-    /// Input occupancy `[N, 1, R, R, R]` (values in 0..1), also the reconstruction target.
+    /// Input occupancy `[N, 1, R, R, R]` (values in 0..1) in RenderNet's input layout
+    /// (`nn::camera::input_values`), also the reconstruction target.
     pub grid: Value,
     /// The latent code `[N, L, 1, 1]` (after the sigmoid).
     pub code: Value,
@@ -68,19 +69,40 @@ impl ShapePrior {
         x = b.g.apply("enc.flat", Op::Reshape(vec![n, flat, 1, 1]), &[x])?;
         x = b.dense("enc.fc", x, p.latent)?;
         let code = b.g.apply("code", Op::Sigmoid, &[x])?;
-        let s = r / 8;
-        x = b.dense("dec.fc", code, p.dec[0] * s * s * s)?;
-        x = b.g.apply("dec.fc.act", Op::Elu(1.0), &[x])?;
-        x = b.g.apply("dec.grid", Op::Reshape(vec![n, p.dec[0], s, s, s]), &[x])?;
-        for (i, &c) in p.dec[1..].iter().enumerate() {
-            x = b.conv_transpose(&format!("dec.up{i}"), x, c, ConvTranspose::conv3d([4; 3], [2; 3], Padding::Same))?;
-            x = b.g.apply(&format!("dec.act{i}"), Op::Elu(1.0), &[x])?;
-        }
-        x = b.conv("dec.out", x, 1, Conv::conv3d([3; 3], [1; 3], Padding::Same))?;
-        let recon = g.apply("recon", Op::Sigmoid, &[x])?;
+        let recon = decoder(&mut b, p, code)?;
         let loss = if with_loss { Some(g.apply("loss", Op::Loss(Loss::Bce), &[recon, grid])?) } else { None };
         Ok(ShapePrior { graph: g, grid, code, recon, loss })
     }
+}
+
+/// The decoder on `code` (`[N, L, 1, 1]`, in 0..1): occupancy probabilities `[N, 1, R, R, R]`
+/// in RenderNet's input layout. Its parameters are named `dec.*`.
+pub(crate) fn decoder(b: &mut Builder, p: &PriorPreset, code: Value) -> Result<Value> {
+    let n = b.g.info(code).shape[0];
+    let s = p.res / 8;
+    let mut x = b.dense("dec.fc", code, p.dec[0] * s * s * s)?;
+    x = b.g.apply("dec.fc.act", Op::Elu(1.0), &[x])?;
+    x = b.g.apply("dec.grid", Op::Reshape(vec![n, p.dec[0], s, s, s]), &[x])?;
+    for (i, &c) in p.dec[1..].iter().enumerate() {
+        x = b.conv_transpose(&format!("dec.up{i}"), x, c, ConvTranspose::conv3d([4; 3], [2; 3], Padding::Same))?;
+        x = b.g.apply(&format!("dec.act{i}"), Op::Elu(1.0), &[x])?;
+    }
+    x = b.conv("dec.out", x, 1, Conv::conv3d([3; 3], [1; 3], Padding::Same))?;
+    b.g.apply("recon", Op::Sigmoid, &[x])
+}
+
+/// The prior's decoder in front of RenderNet: a latent code input `code` `[N, L, 1, 1]`
+/// decoded into the grid RenderNet renders, for shape recovery by gradient descent on the
+/// code (the paper's MAP with the decoder as prior). Load RenderNet's weights and the
+/// prior's `dec.*` weights with [`crate::graph::Executor::load_params_parts`].
+pub fn decoder_with_renderer(p: &PriorPreset, rp: &crate::nn::rendernet::Preset, head: crate::nn::rendernet::Head, n: usize, cam_hw: [usize; 2]) -> Result<(crate::nn::rendernet::RenderNet, Value)> {
+    if p.res != rp.input {
+        return Err(Error::Invalid(format!("the prior decodes {}^3 grids; preset '{}' reads {}^3", p.res, rp.name, rp.input)));
+    }
+    let mut g = Graph::new();
+    let code = g.input("code", &[n, p.latent, 1, 1])?;
+    let grid = decoder(&mut Builder { g: &mut g }, p, code)?;
+    Ok((crate::nn::rendernet::RenderNet::build_on(g, grid, rp, head, cam_hw, false)?, code))
 }
 
 /// Intersection over union of two occupancy grids thresholded at 0.5 (1 when both are empty).

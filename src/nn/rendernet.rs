@@ -207,13 +207,25 @@ impl RenderNet {
     /// whole). With `with_loss`, adds target inputs and the training loss: for Phong,
     /// MSE(image) + MSE(normal map) + MSE(albedo map) + BCE(mask); for an image head, BCE (greyscale).
     pub fn build(p: &Preset, head: Head, n: usize, cam_hw: [usize; 2], with_loss: bool) -> Result<RenderNet> {
+        let mut g = Graph::new();
+        let r = p.input;
+        let grid = g.input("grid", &[n, 1, r, r, r])?;
+        Self::build_on(g, grid, p, head, cam_hw, with_loss)
+    }
+
+    /// [`RenderNet::build`] on a graph that already computes the input grid `grid`
+    /// (`[N, 1, R, R, R]`, R the preset's input side), e.g. a shape decoder's output, so
+    /// gradients reach what made the grid.
+    pub fn build_on(mut g: Graph, grid: Value, p: &Preset, head: Head, cam_hw: [usize; 2], with_loss: bool) -> Result<RenderNet> {
         if cam_hw.iter().any(|&s| s % 4 != 0 || s == 0) {
             return Err(Error::Invalid(format!("camera window {cam_hw:?}: sides must be positive multiples of 4")));
         }
-        let mut g = Graph::new();
-        let mut b = Builder { g: &mut g };
         let r = p.input;
-        let grid = b.g.input("grid", &[n, 1, r, r, r])?;
+        let n = g.info(grid).shape[0];
+        if g.info(grid).shape != [n, 1, r, r, r] {
+            return Err(Error::Invalid(format!("grid {:?}: preset '{}' needs [N, 1, {r}, {r}, {r}]", g.info(grid).shape, p.name)));
+        }
+        let mut b = Builder { g: &mut g };
         let pose = b.g.input("pose", &[n, 6])?;
         let x = b.g.apply("resample", Op::Resample([p.cam, cam_hw[0], cam_hw[1]]), &[grid, pose])?;
         let x = b.conv("enc3d.conv1", x, p.c3[0], Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same))?;

@@ -37,14 +37,15 @@ pub struct PriorConfig {
     pub eval_samples: usize,
 }
 
-/// The grid of sample `i` of `split` as the prior reads it (the dataset's resolution must be
-/// the preset's).
+/// The grid of sample `i` of `split` as the prior reads it: in RenderNet's input layout
+/// (`nn::camera::input_values`), so a decoded grid feeds the renderer as it is. The
+/// dataset's resolution must be the preset's.
 fn grid_of(ds: &Dataset, split: Split, i: usize, res: usize) -> Result<Vec<f32>> {
     let s = ds.split(split).get(i)?;
     if s.grid.dims() != [res; 3] {
         return Err(Error::Invalid(format!("{}: grids are {:?}; the prior needs {res}^3", ds.dir().display(), s.grid.dims())));
     }
-    Ok(s.grid.occupancy().to_vec())
+    Ok(crate::nn::camera::input_values(&s.grid))
 }
 
 /// Mean IoU (threshold 0.5) of the prior's reconstructions of `samples` held-out grids
