@@ -31,6 +31,20 @@ pub fn input_values(grid: &VoxelGrid) -> Vec<f32> {
     out
 }
 
+/// The grid whose [`input_values`] are `values` (a cube of side `r`): the inverse
+/// permutation, for grids a network produced in its input layout (the shape prior's decoder).
+pub fn grid_from_input_values(values: &[f32], r: usize) -> crate::error::Result<VoxelGrid> {
+    let mut occ = vec![0.0; r * r * r];
+    for a in 0..r {
+        for b in 0..r {
+            for c in 0..r {
+                occ[(c * r + (r - 1 - b)) * r + a] = values[(a * r + b) * r + c];
+            }
+        }
+    }
+    VoxelGrid::new([r; 3], occ).map_err(|e| crate::error::Error::Invalid(e.to_string()))
+}
+
 /// The input tensor's spatial shape for a grid of `dims` `[D, H, W]`: `[W, H, D]`.
 pub fn input_dims(dims: [usize; 3]) -> [usize; 3] {
     [dims[2], dims[1], dims[0]]
@@ -60,4 +74,20 @@ pub fn pose_for_view(view: &View, input: usize, cam_hw: usize, crop: Option<[usi
 pub fn light_values(light: &Light) -> [f32; 6] {
     let d = light.direction();
     [d.x, d.y, d.z, light.colour[0], light.colour[1], light.colour[2]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `grid_from_input_values` undoes `input_values` on a grid with no symmetry to hide a
+    /// swapped or flipped axis.
+    #[test]
+    fn input_layout_round_trips() {
+        let r = 5;
+        let occ: Vec<f32> = (0..r * r * r).map(|i| (i * 7 % 11) as f32 / 10.0).collect();
+        let grid = VoxelGrid::new([r; 3], occ.clone()).unwrap();
+        let back = grid_from_input_values(&input_values(&grid), r).unwrap();
+        assert_eq!(back.occupancy(), &occ[..]);
+    }
 }

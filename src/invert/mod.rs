@@ -11,6 +11,9 @@
 //! loss; gradients reach the pose through the resampling op and the light through the Phong
 //! op. The start with the lowest final MSE wins.
 
+mod shape;
+pub use shape::{ShapeEstimate, ShapeOptions};
+
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::graph::{Executor, Op, Value};
