@@ -39,6 +39,9 @@ enum Cmd {
     Curve(cli::train::CurveArgs),
     /// Train the 3D shape autoencoder used as a shape prior by inverse rendering.
     TrainPrior(cli::prior::TrainPriorArgs),
+    /// Recover held-out shapes through the shape prior (pose and light known) and report
+    /// their voxel IoU beside the prior's starting shape's.
+    EvalShape(cli::shape::EvalShapeArgs),
     /// Recover the camera pose and the light from one image of a known shape, by gradient
     /// descent through the frozen network (coarse silhouette search, then Adam on the best
     /// starts). Without --image, the target is rendered from the scene flags and the errors
@@ -83,6 +86,7 @@ fn main() -> ExitCode {
         Cmd::Eval(a) => cli::eval::run(a),
         Cmd::Curve(a) => cli::train::run_curve(a),
         Cmd::TrainPrior(a) => cli::prior::run(a),
+        Cmd::EvalShape(a) => cli::shape::run(a),
         Cmd::Bench(a) => cli::bench::run(a),
         Cmd::Invert(a) => cli::invert::run(a),
         Cmd::Stress(a) => cli::stress::run(a),

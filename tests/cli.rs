@@ -428,14 +428,15 @@ fn stress_unseen_scores_every_shape_file_of_a_folder() {
 
 /// `train-prior` trains the shape autoencoder on a dataset's grids: it writes the checkpoint
 /// and the weights, reports a held-out IoU in 0..1, resumes from its checkpoint, and refuses
-/// to overwrite a checkpoint without --resume or --force.
+/// to overwrite a checkpoint without --resume or --force; `eval-shape` then recovers a
+/// held-out shape through it and reports IoUs in 0..1.
 #[test]
 fn train_prior_trains_resumes_and_reports_iou() {
     let dir = std::env::temp_dir().join(format!("rendernet-cli-prior-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let (data, ckpt) = (dir.join("data"), dir.join("prior.ckpt"));
     let (d, c) = (data.to_str().unwrap(), ckpt.to_str().unwrap());
-    run_ok(&["dataset", "--count", "2", "--views", "2", "--res", "16", "--image", "32", "--seed", "5", "--out", d]);
+    run_ok(&["dataset", "--count", "2", "--views", "2", "--res", "32", "--image", "128", "--seed", "5", "--out", d]);
     let common = ["--data", d, "--out", c, "--batch", "2", "--eval-every", "2", "--eval-samples", "2"];
     let out = run_ok(&[&["train-prior", "--steps", "2"][..], &common[..]].concat());
     let iou: f64 = out.lines().find_map(|l| l.strip_prefix("final held-out IoU ")).and_then(|r| r.split(';').next()).unwrap_or_else(|| panic!("{out}")).parse().unwrap();
@@ -445,5 +446,11 @@ fn train_prior_trains_resumes_and_reports_iou() {
     assert!(!again.status.success() && String::from_utf8_lossy(&again.stderr).contains("--resume"));
     let out = run_ok(&[&["train-prior", "--steps", "4", "--resume", c][..], &common[..]].concat());
     assert!(out.contains("step 4/4"), "{out}");
+    let w = ckpt.with_extension("weights.safetensors");
+    let out = run_ok(&["eval-shape", "--data", d, "--prior", w.to_str().unwrap(), "--samples", "1", "--steps", "2", "--json"]);
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"));
+    for key in ["iou_mean", "start_iou_mean"] {
+        assert!(j[key].as_f64().is_some_and(|v| (0.0..=1.0).contains(&v)), "{key} in {out}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -134,16 +134,22 @@ pub struct EvalInvertArgs {
     json: bool,
 }
 
+/// The network of `net` set up to invert images of the Phong dataset `ds` (its material
+/// constants), and the weights' name.
+pub(crate) fn dataset_inverter(net: &super::weights::WeightsArgs, ds: &Dataset) -> Result<(Inverter, String)> {
+    let Head::Phong(ph) = head_for(ds)? else {
+        return Err(Error::Invalid(format!("{}: inversion needs a Phong dataset", ds.dir().display())));
+    };
+    let light = Light { ambient: ph.ambient, kd: ph.kd, ks: ph.ks, shininess: ph.shininess, ..Light::default() };
+    let (bytes, name) = net.load()?;
+    Ok((Inverter::new(net.preset()?, &bytes, &name, light), name))
+}
+
 /// Inverts held-out samples and summarises the errors.
 pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
     let gpu = Gpu::new()?;
     let ds = Dataset::open(&a.data)?;
-    let Head::Phong(ph) = head_for(&ds)? else {
-        return Err(Error::Invalid(format!("{}: inversion needs a Phong dataset", a.data.display())));
-    };
-    let light = Light { ambient: ph.ambient, kd: ph.kd, ks: ph.ks, shininess: ph.shininess, ..Light::default() };
-    let (bytes, name) = a.net.load()?;
-    let inv = Inverter::new(a.net.preset()?, &bytes, &name, light);
+    let (inv, name) = dataset_inverter(&a.net, &ds)?;
     let o = InvertOptions { steps: a.steps, ..Default::default() };
     let bar = ProgressBar::new(a.samples as u64);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} images [{elapsed_precise}<{eta_precise}]").expect("static template"));

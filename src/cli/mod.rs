@@ -9,6 +9,7 @@ pub mod invert;
 pub mod output;
 pub mod prior;
 pub mod render;
+pub mod shape;
 pub mod stress;
 pub mod train;
 pub mod truth;

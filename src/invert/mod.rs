@@ -12,7 +12,7 @@
 //! op. The start with the lowest final MSE wins.
 
 mod shape;
-pub use shape::{ShapeEstimate, ShapeOptions};
+pub use shape::{ShapeError, ShapeEstimate, ShapeOptions, evaluate_shapes};
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;

@@ -97,3 +97,52 @@ impl Inverter {
         Ok(ShapeEstimate { grid, code: best.1, curve })
     }
 }
+
+/// One held-out sample's shape recovery, scored.
+#[derive(Clone, Debug)]
+pub struct ShapeError {
+    /// Shape the sample shows.
+    pub shape_id: u32,
+    /// Voxel IoU (threshold 0.5) of the recovered grid against the true one.
+    pub iou: f64,
+    /// The same for the starting code's grid: what the prior gives without the image.
+    pub iou_start: f64,
+    /// Final image MSE over the search window.
+    pub mse: f64,
+    /// Wall time of the search.
+    pub seconds: f64,
+}
+
+/// Recovers the shapes of `samples` held-out samples of `ds` (spread over the split; 0 =
+/// all) from their images at their true pose and light, and scores them by voxel IoU.
+/// The dataset's grids must have the prior's side. `progress(done, total)`.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_shapes(
+    gpu: &Gpu,
+    inv: &Inverter,
+    prior: &PriorPreset,
+    prior_weights: &[u8],
+    ds: &crate::data::Dataset,
+    samples: usize,
+    o: &ShapeOptions,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Vec<ShapeError>> {
+    let test = ds.split(crate::data::Split::Test);
+    let n = if samples == 0 { test.len() } else { samples.min(test.len()) };
+    let mut out = Vec::with_capacity(n);
+    for k in 0..n {
+        let s = test.get(k * test.len() / n)?;
+        if s.grid.dims() != [prior.res; 3] {
+            return Err(crate::Error::Invalid(format!("{}: grids are {:?}; the prior's are {}^3", ds.dir().display(), s.grid.dims(), prior.res)));
+        }
+        let target = s.images.get("phong").ok_or_else(|| crate::Error::Invalid(format!("{}: not a Phong dataset", ds.dir().display())))?;
+        let t = std::time::Instant::now();
+        let est = inv.recover_shape(gpu, prior, prior_weights, target, &s.view, &s.light, o)?;
+        let seconds = t.elapsed().as_secs_f64();
+        let start = inv.recover_shape(gpu, prior, prior_weights, target, &s.view, &s.light, &ShapeOptions { steps: 0, ..o.clone() })?;
+        let iou = |g: &VoxelGrid| crate::nn::prior::iou(g.occupancy(), s.grid.occupancy());
+        out.push(ShapeError { shape_id: s.shape_id, iou: iou(&est.grid), iou_start: iou(&start.grid), mse: *est.curve.last().unwrap_or(&f64::NAN), seconds });
+        progress(k + 1, n);
+    }
+    Ok(out)
+}
