@@ -39,6 +39,7 @@ fn opts(seed: u64, shader: Shader) -> GenerateOptions {
         test_fraction: 0.3,
         radius: rendernet::data::generate::PAPER_RADII,
         supersample: 1,
+        ao_rays: 64,
         real_dir: PathBuf::from("datasets/real"),
     }
 }
@@ -351,4 +352,30 @@ fn cli_writes_a_dataset_and_explains_missing_real_meshes() {
         !out.status.success() && err.contains("fetch_real.sh"),
         "{err}"
     );
+}
+
+/// `ao_rays` sets the ambient-occlusion rays of AO targets: 16 rays give the same picture
+/// as 64 up to sampling (close on average, not identical), the manifest records the count,
+/// and a count that is not a perfect square is refused by name.
+#[test]
+fn ao_targets_take_their_ray_count() {
+    let images = |rays: u32| {
+        let d = tmp(&format!("ao{rays}"));
+        let mut o = opts(4, Shader::AmbientOcclusion);
+        o.count = 1;
+        o.views = 1;
+        o.test_fraction = 0.0;
+        o.ao_rays = rays;
+        data::generate(gpu(), &o, &d, |_, _| {}).unwrap();
+        let ds = Dataset::open(&d).unwrap();
+        assert_eq!(ds.manifest.ao_rays, rays);
+        ds.split(Split::Train).get(0).unwrap().images["image"].data.clone()
+    };
+    let (coarse, fine) = (images(16), images(64));
+    let diff = coarse.iter().zip(&fine).map(|(a, b)| (a - b).abs()).sum::<f32>() / fine.len() as f32;
+    assert!(diff > 0.0 && diff < 0.05, "mean |AO16 - AO64| = {diff}");
+    let mut o = opts(4, Shader::AmbientOcclusion);
+    o.ao_rays = 15;
+    let err = data::generate(gpu(), &o, &tmp("ao15"), |_, _| {}).unwrap_err().to_string();
+    assert!(err.contains("--ao-rays 15"), "{err}");
 }

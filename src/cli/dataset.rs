@@ -45,6 +45,10 @@ pub struct DatasetArgs {
     /// Sub-pixels per axis averaged into each target pixel (anti-aliasing).
     #[arg(long, default_value_t = 2)]
     supersample: u32,
+    /// Ambient-occlusion rays per pixel of --shader ao targets: a perfect square (stratified
+    /// directions). 16 renders about 4x faster than the default 64, with coarser shading.
+    #[arg(long, default_value_t = 64)]
+    ao_rays: u32,
     /// Meshes for --shapes real (see datasets/fetch_real.sh).
     #[arg(long, default_value = "datasets/real")]
     real_dir: PathBuf,
@@ -81,6 +85,7 @@ pub fn run(a: DatasetArgs) -> Result<()> {
         test_fraction: a.test_fraction,
         radius: a.radius,
         supersample: a.supersample,
+        ao_rays: a.ao_rays,
         real_dir: a.real_dir,
     };
     let bar = indicatif::ProgressBar::new((o.count * o.views) as u64);

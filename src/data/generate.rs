@@ -87,6 +87,9 @@ pub struct GenerateOptions {
     pub radius: (f64, f64),
     /// Sub-pixels per axis of the targets (anti-aliasing).
     pub supersample: u32,
+    /// Ambient-occlusion rays per pixel, a perfect square (stratified directions); fewer
+    /// make AO targets cheaper to render and coarser.
+    pub ao_rays: u32,
     /// Directory of meshes for [`Shapes::Real`].
     pub real_dir: PathBuf,
 }
@@ -413,8 +416,13 @@ pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path, mut progress: impl F
     }
     let n_test = ((o.test_fraction * o.count as f64).ceil() as usize).min(o.count);
     let n_train = o.count - n_test;
+    let ao_sqrt = (o.ao_rays as f64).sqrt().round() as u32;
+    if ao_sqrt * ao_sqrt != o.ao_rays || !(1..=256).contains(&o.ao_rays) {
+        return Err(Error::Invalid(format!("--ao-rays {}: must be a perfect square in 1..=256 (4, 16, 64, ...)", o.ao_rays)));
+    }
     let renderer = RayMarcher::new(gpu).with_options(Options {
         supersample: o.supersample,
+        ao_dirs_sqrt: ao_sqrt,
         ..Options::default()
     });
     let mut w = Writer {
@@ -450,6 +458,7 @@ pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path, mut progress: impl F
         train,
         test,
         supersample: o.supersample,
+        ao_rays: o.ao_rays,
         test_fraction: o.test_fraction,
         radius: o.radius,
     };

@@ -64,6 +64,8 @@ pub struct Manifest {
     pub test: SplitInfo,
     /// Sub-pixels per axis of the targets (extra key; 1 when absent).
     pub supersample: u32,
+    /// Ambient-occlusion rays per pixel of the targets (extra key; 64 when absent).
+    pub ao_rays: u32,
     /// Fraction of shapes held out for test (extra key, informational).
     pub test_fraction: f64,
     /// Camera radius range (extra key; the paper's 3..6.3 when absent).
@@ -93,6 +95,7 @@ impl Manifest {
             "train": split(&self.train),
             "test": split(&self.test),
             "supersample": self.supersample,
+            "ao_rays": self.ao_rays,
             "test_fraction": self.test_fraction,
             "radius": [self.radius.0, self.radius.1],
         });
@@ -197,6 +200,7 @@ impl Manifest {
             train: split(Split::Train)?,
             test: split(Split::Test)?,
             supersample: v.get("supersample").and_then(Value::as_u64).unwrap_or(1) as u32,
+            ao_rays: v.get("ao_rays").and_then(Value::as_u64).unwrap_or(64) as u32,
             test_fraction: v
                 .get("test_fraction")
                 .and_then(Value::as_f64)
