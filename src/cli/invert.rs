@@ -129,6 +129,9 @@ pub struct EvalInvertArgs {
     /// Refinement steps per sample.
     #[arg(long, default_value_t = InvertOptions::default().steps)]
     steps: usize,
+    /// Starts refined per sample (the best by silhouette, each with its opposite-side twin).
+    #[arg(long, default_value_t = InvertOptions::default().keep)]
+    starts: usize,
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
@@ -150,7 +153,7 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
     let gpu = Gpu::new()?;
     let ds = Dataset::open(&a.data)?;
     let (inv, name) = dataset_inverter(&a.net, &ds)?;
-    let o = InvertOptions { steps: a.steps, ..Default::default() };
+    let o = InvertOptions { steps: a.steps, keep: a.starts, ..Default::default() };
     let bar = ProgressBar::new(a.samples as u64);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} images [{elapsed_precise}<{eta_precise}]").expect("static template"));
     let errs = invert::evaluate(&gpu, &inv, &ds, a.samples, &o, |done, total| {

@@ -16,8 +16,8 @@ pub struct WeightsArgs {
     /// weights of --preset (tiny or nano).
     #[arg(long)]
     pub weights: Option<PathBuf>,
-    /// Network size the weights belong to: tiny (default), nano (faster, less accurate) or
-    /// paper.
+    /// Network size the weights belong to: tiny (default), nano (faster, less accurate),
+    /// small, base or paper (no weights are shipped for the last three: pass --weights).
     #[arg(long, default_value = "tiny")]
     pub preset: String,
 }
