@@ -338,6 +338,14 @@ impl SplitView<'_> {
         self.len() == 0
     }
 
+    /// Indices of `samples` samples spread evenly over the split (0 or more than there are:
+    /// all), so an evaluation of a few samples still sees every part of the shape list.
+    pub fn spread(&self, samples: usize) -> impl Iterator<Item = usize> + use<> {
+        let len = self.len();
+        let n = if samples == 0 { len } else { samples.min(len) };
+        (0..n).map(move |k| k * len / n)
+    }
+
     /// Sample `i` (`0..len`), decoding its shard on first use.
     pub fn get(&self, i: usize) -> Result<Sample> {
         let ds = self.ds;

@@ -527,6 +527,11 @@ pub struct InvertError {
     pub seconds: f64,
 }
 
+/// The reference Phong image of a sample of `ds`, or an error naming the dataset.
+fn phong_target<'a>(ds: &crate::data::Dataset, s: &'a crate::data::Sample) -> Result<&'a Image> {
+    s.images.get("phong").ok_or_else(|| Error::Invalid(format!("{}: not a Phong dataset (no 'phong' images)", ds.dir().display())))
+}
+
 /// Inverts `samples` held-out samples of `ds` (spread over the split; 0 = all) from their
 /// target images, with the grid known, and measures the errors. `progress(done, total)`.
 pub fn evaluate(
@@ -538,11 +543,11 @@ pub fn evaluate(
     mut progress: impl FnMut(usize, usize),
 ) -> Result<Vec<InvertError>> {
     let test = ds.split(crate::data::Split::Test);
-    let n = if samples == 0 { test.len() } else { samples.min(test.len()) };
+    let n = test.spread(samples).count();
     let mut out = Vec::with_capacity(n);
-    for k in 0..n {
-        let s = test.get(k * test.len() / n)?;
-        let target = s.images.get("phong").ok_or_else(|| Error::Invalid(format!("{}: not a Phong dataset (no 'phong' images)", ds.dir().display())))?;
+    for (k, i) in test.spread(samples).enumerate() {
+        let s = test.get(i)?;
+        let target = phong_target(ds, &s)?;
         let t = std::time::Instant::now();
         let est = inv.invert(gpu, &s.grid, target, o, |_, _| {})?;
         out.push(InvertError {

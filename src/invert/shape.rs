@@ -128,14 +128,14 @@ pub fn evaluate_shapes(
     mut progress: impl FnMut(usize, usize),
 ) -> Result<Vec<ShapeError>> {
     let test = ds.split(crate::data::Split::Test);
-    let n = if samples == 0 { test.len() } else { samples.min(test.len()) };
+    let n = test.spread(samples).count();
     let mut out = Vec::with_capacity(n);
-    for k in 0..n {
-        let s = test.get(k * test.len() / n)?;
+    for (k, i) in test.spread(samples).enumerate() {
+        let s = test.get(i)?;
         if s.grid.dims() != [prior.res; 3] {
             return Err(crate::Error::Invalid(format!("{}: grids are {:?}; the prior's are {}^3", ds.dir().display(), s.grid.dims(), prior.res)));
         }
-        let target = s.images.get("phong").ok_or_else(|| crate::Error::Invalid(format!("{}: not a Phong dataset", ds.dir().display())))?;
+        let target = super::phong_target(ds, &s)?;
         let t = std::time::Instant::now();
         let est = inv.recover_shape(gpu, prior, prior_weights, target, &s.view, &s.light, o)?;
         let seconds = t.elapsed().as_secs_f64();

@@ -74,7 +74,7 @@ pub fn evaluate(gpu: &Gpu, p: &Preset, head: Head, weights: &Path, ds: &Dataset,
 /// embedded ones.
 pub fn evaluate_bytes(gpu: &Gpu, p: &Preset, head: Head, weights: &[u8], name: &str, ds: &Dataset, limit: usize) -> Result<EvalReport> {
     let test = ds.split(Split::Test);
-    let n = if limit == 0 { test.len() } else { limit.min(test.len()) };
+    let n = test.spread(limit).count();
     let net = RenderNet::build(p, head, 1, [p.cam, p.cam], false)?;
     let mut ex = Executor::new(gpu, net.graph.clone(), 0)?;
     ex.load_params_bytes(gpu, weights, name)?;
@@ -88,9 +88,7 @@ pub fn evaluate_bytes(gpu: &Gpu, p: &Preset, head: Head, weights: &[u8], name: &
     let side = net.graph.info(net.image).shape[3];
     let (mut net_scores, mut black_scores) = (Vec::with_capacity(n), Vec::with_capacity(n));
     let mut shapes: BTreeMap<u32, Vec<Scores>> = BTreeMap::new();
-    // Spread the evaluated samples over the split so every shape is represented.
-    for k in 0..n {
-        let i = k * test.len() / n;
+    for i in test.spread(limit) {
         let s = test.get(i)?;
         let mut b = Batch::default();
         b.push(p, &s, [0, 0, p.cam, p.cam], &[target.to_string()])?;

@@ -52,7 +52,7 @@ fn grid_of(ds: &Dataset, split: Split, i: usize, res: usize) -> Result<Vec<f32>>
 /// (spread over the split; 0 = all), with weights from `weights` (safetensors bytes).
 pub fn evaluate(gpu: &Gpu, p: &PriorPreset, weights: &[u8], ds: &Dataset, samples: usize) -> Result<f64> {
     let test = ds.split(Split::Test);
-    let n = if samples == 0 { test.len() } else { samples.min(test.len()) };
+    let n = test.spread(samples).count();
     if n == 0 {
         return Err(Error::Invalid(format!("{}: the test split is empty", ds.dir().display())));
     }
@@ -62,8 +62,8 @@ pub fn evaluate(gpu: &Gpu, p: &PriorPreset, weights: &[u8], ds: &Dataset, sample
     ex.training = false;
     ex.keep(net.recon);
     let mut sum = 0.0;
-    for k in 0..n {
-        let g = grid_of(ds, Split::Test, k * test.len() / n, p.res)?;
+    for i in test.spread(samples) {
+        let g = grid_of(ds, Split::Test, i, p.res)?;
         ex.feed(gpu, net.grid, &g)?;
         ex.forward(gpu)?;
         sum += iou(&ex.read(gpu, net.recon)?, &g);
