@@ -119,15 +119,53 @@ pub fn line_chart<S: AsRef<str>>(path: &Path, title: &str, x_label: &str, y_labe
 /// Writes `path`: the panels stacked top to bottom, each as [`line_chart`] draws it at its
 /// `options.size`; the image is as wide as the widest panel and as tall as all together.
 pub fn line_panels(path: &Path, panels: &[Panel]) -> Result<()> {
-    let w = panels.iter().map(|p| p.options.size.0).max().unwrap_or(1);
-    let h = panels.iter().map(|p| p.options.size.1).sum::<u32>().max(1);
-    write(path, (w, h), |root| {
-        let mut rest = root.clone();
-        for p in panels {
-            let (top, below) = rest.split_vertically(p.options.size.1);
+    let refs: Vec<PanelRef> = panels
+        .iter()
+        .map(|p| {
             let layers = p.series.iter().map(|(n, pts)| Layer { name: n, points: pts.iter().map(|&(x, y)| (x, y, "")).collect(), line: true }).collect();
-            draw_panel(&top, &PanelRef { title: &p.title, x_label: &p.x_label, y_label: &p.y_label, layers, options: &p.options })?;
-            rest = below;
+            PanelRef { title: &p.title, x_label: &p.x_label, y_label: &p.y_label, layers, options: &p.options }
+        })
+        .collect();
+    draw_grid(path, &refs, 1)
+}
+
+/// One chart of a [`scatter_panels`] image: groups of labelled points, as [`scatter_chart`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScatterPanel {
+    /// Title above the plot.
+    pub title: String,
+    /// Label of the x axis (say what and in which unit).
+    pub x_label: String,
+    /// Label of the y axis.
+    pub y_label: String,
+    /// Named groups (a colour and legend entry each) of (x, y, point label).
+    pub groups: Vec<(String, Vec<(f64, f64, String)>)>,
+    /// Size (this panel's share of the image) and axes.
+    pub options: Options,
+}
+
+/// Writes `path`: scatter panels in rows of `columns`, each drawn as [`scatter_chart`] draws
+/// it in a cell as large as the largest panel's `options.size`.
+pub fn scatter_panels(path: &Path, panels: &[ScatterPanel], columns: usize) -> Result<()> {
+    let refs: Vec<PanelRef> = panels
+        .iter()
+        .map(|p| {
+            let layers = p.groups.iter().map(|(n, pts)| Layer { name: n, points: pts.iter().map(|(x, y, l)| (*x, *y, l.as_str())).collect(), line: false }).collect();
+            PanelRef { title: &p.title, x_label: &p.x_label, y_label: &p.y_label, layers, options: &p.options }
+        })
+        .collect();
+    draw_grid(path, &refs, columns)
+}
+
+/// Draws panels into a grid of `columns` columns, each cell as large as the largest panel.
+fn draw_grid(path: &Path, panels: &[PanelRef], columns: usize) -> Result<()> {
+    let columns = columns.clamp(1, panels.len().max(1));
+    let rows = panels.len().div_ceil(columns).max(1);
+    let cw = panels.iter().map(|p| p.options.size.0).max().unwrap_or(200);
+    let ch = panels.iter().map(|p| p.options.size.1).max().unwrap_or(150);
+    write(path, (cw * columns as u32, ch * rows as u32), |root| {
+        for (cell, p) in root.split_evenly((rows, columns)).iter().zip(panels) {
+            draw_panel(cell, p)?;
         }
         Ok(())
     })

@@ -25,7 +25,7 @@ fn presets_build_with_the_papers_shapes() {
     let proj = big.graph.value("proj.weight").unwrap();
     assert_eq!(big.graph.info(proj).shape, [1024, 16 * 32, 1, 1]);
     assert!(RenderNet::build(&p, head, 1, [6, 8], false).is_err(), "windows must be multiples of 4");
-    assert!(Preset::by_name("huge").unwrap_err().to_string().contains("base or paper"));
+    assert!(Preset::by_name("huge").unwrap_err().to_string().contains("paper, ec or ec-deep"));
 }
 
 fn rendernet(args: &[&str]) -> String {
@@ -64,6 +64,10 @@ fn dataset_train_resume_and_eval_from_the_command_line() {
     let losses = log.lines().filter(|l| l.ends_with(',')).count();
     assert_eq!(losses, 4, "{log}");
     assert!(log.contains("\n2,,") && log.contains("\n4,,"), "{log}");
+    // The weights record the images seen across the interruption (4 steps x batch 2).
+    let meta = rendernet::graph::params::load_safetensors(&ckpt.with_extension("weights.safetensors")).unwrap().1;
+    assert_eq!(meta.get("images").map(String::as_str), Some("8"), "{meta:?}");
+    assert!(meta.get("train_seconds").and_then(|s| s.parse::<f64>().ok()).is_some(), "{meta:?}");
     let straight = dir.join("straight.ckpt");
     rendernet(&[&["train", "--steps", "4", "--out", straight.to_str().unwrap()][..], &common[..]].concat());
     let (resumed, uninterrupted) = (tensors_of(&ckpt.with_extension("weights.safetensors")), tensors_of(&straight.with_extension("weights.safetensors")));
@@ -213,10 +217,17 @@ fn frontier_scores_and_times_every_model() {
     rendernet(&["dataset", "--count", "2", "--views", "1", "--res", "16", "--image", "128", "--seed", "9", "--out", data.to_str().unwrap()]);
     std::fs::write(&w, TINY_PHONG_WEIGHTS).unwrap();
     let model = format!("copy=tiny:{}", w.display());
-    let out = rendernet(&["frontier", "--data", data.to_str().unwrap(), "--samples", "1", "--repeat", "1", "--model", &model, "--out", png.to_str().unwrap(), "--json"]);
+    // One EC training step on whole frames: the baseline's trainer path and its chart group.
+    let ec = dir.join("ec.ckpt");
+    rendernet(&["train", "--preset", "ec", "--data", data.to_str().unwrap(), "--out", ec.to_str().unwrap(), "--steps", "1", "--eval-samples", "1"]);
+    let ec_model = format!("ec=ec:{}", ec.with_extension("weights.safetensors").display());
+    let out = rendernet(&["frontier", "--data", data.to_str().unwrap(), "--samples", "1", "--repeat", "1", "--model", &model, "--model", &ec_model, "--out", png.to_str().unwrap(), "--json"]);
     let j: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"));
     let models = j["models"].as_array().unwrap();
-    assert_eq!(models.len(), 3, "the shipped nano and tiny, and the copy: {out}");
+    assert_eq!(models.len(), 4, "the shipped nano and tiny, the copy and EC: {out}");
+    assert_eq!((models[1]["arch"].as_str(), models[1]["train_images"].as_u64()), (Some("RenderNet"), Some(54000)), "{out}");
+    assert_eq!((models[3]["arch"].as_str(), models[3]["train_images"].as_u64()), (Some("EC baselines"), Some(1)), "{out}");
+    assert!(models[3]["train_seconds"].as_f64().is_some_and(|v| v >= 0.0), "{out}");
     for m in models {
         assert!(m["object_psnr"].as_f64().is_some_and(|v| v.is_finite() && v > 0.0), "{m}");
         assert!(m["forward_ms"].as_f64().is_some_and(|v| v > 0.0), "{m}");
@@ -272,4 +283,68 @@ fn training_steps_after_the_first_create_no_gpu_objects() {
     assert!(fresh_stats[2].created > 0, "{:?}", fresh_stats[2]);
     assert!(weights == fresh, "reusing scratch and bind groups changed the result");
 
+}
+
+/// The EC baselines: whole 128 px frames from a 32^3 grid, pose and light; a camera-grid
+/// crop is refused by name (their fully-connected layers see the whole frame); an image head
+/// takes no light; both fit the < 5 MB budget for shipped weights.
+#[test]
+fn ec_baselines_build_whole_frames_only() {
+    let head = Head::Phong(phong_of(&Light::default()));
+    for p in [Preset::ec(), Preset::ec_deep()] {
+        let net = RenderNet::build(&p, head, 2, [p.cam, p.cam], true).unwrap();
+        assert_eq!(net.graph.info(net.image).shape, [2, 3, 128, 128], "{}", p.name);
+        assert!(net.light.is_some() && net.maps.is_none());
+        assert_eq!(net.targets.iter().map(|t| t.0.as_str()).collect::<Vec<_>>(), ["phong"]);
+        let params: usize = net.graph.params().iter().map(|&v| net.graph.info(v).shape.iter().product::<usize>()).sum();
+        assert!(params * 4 < 5_000_000, "{}: {params} parameters", p.name);
+        let e = RenderNet::build(&p, head, 1, [32, 32], false).err().expect("crop refused").to_string();
+        assert!(e.contains("whole 128x128 frames"), "{e}");
+        let ao = RenderNet::build(&p, Head::Image(1), 1, [p.cam, p.cam], false).unwrap();
+        assert!(ao.light.is_none());
+        assert_eq!(ao.graph.info(ao.image).shape, [1, 1, 128, 128]);
+    }
+    let deep = RenderNet::build(&Preset::ec_deep(), head, 1, [64, 64], false).unwrap();
+    assert!(deep.graph.value("pose.fc.weight").is_some() && deep.graph.value("dec.0.res1.conv2.weight").is_some());
+    let ec = RenderNet::build(&Preset::ec(), head, 1, [64, 64], false).unwrap();
+    assert!(ec.graph.value("pose.fc.weight").is_none() && ec.graph.value("dec.0.conv.weight").is_some());
+}
+
+/// EC and EC-deep at toy sizes: the image depends on the pose (its features reach the
+/// decoder), and Adam on one sample lowers the loss, so every layer's gradient is wired.
+#[test]
+fn ec_baselines_see_the_pose_and_learn() {
+    use rendernet::graph::{Executor, Graph};
+    use rendernet::nn::ec::{EcSizes, build_on, pose_features};
+    use rendernet::ops::adam::Adam;
+    let gpu = Gpu::new().unwrap();
+    let toy = EcSizes { enc: [2, 3, 4, 4], latent: 5, embed: 0, fc: 12, start: 2, dec: vec![6, 4, 3], deep: false };
+    for s in [toy.clone(), EcSizes { embed: 4, deep: true, ..toy }] {
+        let mut g = Graph::new();
+        let grid = g.input("grid", &[1, 1, 16, 16, 16]).unwrap();
+        let net = build_on(g, grid, &s, 16, Head::Phong(phong_of(&Light::default())), true).unwrap();
+        assert_eq!(net.graph.info(net.image).shape, [1, 3, 8, 8]);
+        let mut ex = Executor::new(&gpu, net.graph.clone(), 7).unwrap();
+        ex.keep(net.image);
+        let occ: Vec<f32> = (0..16 * 16 * 16).map(|i| ((i * 37 % 11) < 4) as u8 as f32).collect();
+        ex.feed(&gpu, net.grid, &occ).unwrap();
+        ex.feed(&gpu, net.light.unwrap(), &[0.3, 0.5, 0.8, 1.0, 1.0, 1.0]).unwrap();
+        let target: Vec<f32> = (0..3 * 64).map(|i| if (i * 5) % 7 < 3 { 0.05 } else { 0.95 }).collect();
+        ex.feed(&gpu, net.targets[0].1, &target).unwrap();
+        let mut image_at = |az: f32| {
+            ex.feed(&gpu, net.pose, &pose_features([1.0, az, -0.8, 0.0, 0.0, 0.0])).unwrap();
+            ex.forward(&gpu).unwrap();
+            ex.read(&gpu, net.image).unwrap()
+        };
+        let (a, b) = (image_at(0.3), image_at(-2.5));
+        let moved = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
+        assert!(moved > 1e-5, "deep={}: the pose does not reach the image ({moved})", s.deep);
+        let loss = net.loss.unwrap();
+        let first = ex.train_step(&gpu, loss, &Adam::new(1e-2)).unwrap().loss.unwrap();
+        let mut last = first;
+        for _ in 0..40 {
+            last = ex.train_step(&gpu, loss, &Adam::new(1e-2)).unwrap().loss.unwrap();
+        }
+        assert!(last < 0.8 * first, "deep={}: loss {first} -> {last} after 40 steps", s.deep);
+    }
 }

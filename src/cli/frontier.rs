@@ -43,6 +43,63 @@ struct Model {
     preset: Preset,
     weights: Vec<u8>,
     source: String,
+    /// Training images seen and wall seconds, from the weights' metadata (`rendernet train`
+    /// records them; absent in files written before it did).
+    images: Option<u64>,
+    train_seconds: Option<f64>,
+}
+
+impl Model {
+    fn new(label: String, preset: Preset, weights: Vec<u8>, source: String) -> Result<Model> {
+        let meta = rendernet::graph::params::parse_safetensors(&weights, &source)?.1;
+        let images = meta.get("images").and_then(|v| v.parse().ok());
+        let train_seconds = meta.get("train_seconds").and_then(|v| v.parse().ok());
+        Ok(Model { label, preset, weights, source, images, train_seconds })
+    }
+}
+
+/// The model family, for the chart's groups and the JSON.
+fn family(p: &Preset) -> &'static str {
+    if p.fully_convolutional() { "RenderNet" } else { "EC baselines" }
+}
+
+type Row<'a> = (&'a Model, usize, rendernet::train::eval::EvalReport, f64);
+
+/// Four panels: object and full-frame PSNR, each against forward ms (the reference renderer
+/// as the exact point) and against training hours (models whose weights record it).
+fn write_chart(out: &std::path::Path, rows: &[Row], ref_ms: f64, adapter: &str) -> Result<()> {
+    let psnrs: [(&str, fn(&rendernet::train::eval::EvalReport) -> f64); 2] =
+        [("object PSNR (dB)", |r| r.object_psnr.mean as f64), ("full-frame PSNR (dB)", |r| r.mean as f64)];
+    let mut panels = Vec::new();
+    for timed in [true, false] {
+        for (y_label, y) in psnrs {
+            let mut groups: Vec<(String, Vec<(f64, f64, String)>)> = Vec::new();
+            for (m, _, r, ms) in rows {
+                let x = if timed { Some(*ms) } else { m.train_seconds.map(|s| s / 3600.0) };
+                let Some(x) = x else { continue };
+                let name = family(&m.preset).to_string();
+                let point = (x, y(r), m.label.clone());
+                match groups.iter_mut().find(|g| g.0 == name) {
+                    Some(g) => g.1.push(point),
+                    None => groups.push((name, vec![point])),
+                }
+            }
+            let mut options = Options { size: (760, 520), ..Options::default() };
+            let (title, x_label) = if timed {
+                groups.push(("reference renderer (exact, not learned)".into(), vec![(ref_ms, PSNR_CAP, "reference".into())]));
+                options.cap = Some(Cap { at: PSNR_CAP, note: "exact".into() });
+                let slowest = rows.iter().map(|row| row.3).fold(ref_ms, f64::max);
+                options.x_range = Some((0.0, 1.15 * slowest));
+                (format!("{y_label} against speed"), format!("forward ms, 128 px, on {adapter}"))
+            } else {
+                let longest = rows.iter().filter_map(|row| row.0.train_seconds).fold(0.0, f64::max) / 3600.0;
+                options.x_range = Some((0.0, 1.15 * longest.max(0.1)));
+                (format!("{y_label} against training time"), "training hours (wall clock, 2-core CPU, lavapipe)".to_string())
+            };
+            panels.push(chart::ScatterPanel { title, x_label, y_label: y_label.into(), groups, options });
+        }
+    }
+    chart::scatter_panels(out, &panels, 2)
 }
 
 fn parse_model(s: &str) -> Result<Model> {
@@ -53,7 +110,7 @@ fn parse_model(s: &str) -> Result<Model> {
         return Err(bad());
     }
     let weights = std::fs::read(path).map_err(|e| Error::Io { path: path.to_string(), source: e })?;
-    Ok(Model { label: label.to_string(), preset: Preset::by_name(preset)?, weights, source: path.to_string() })
+    Model::new(label.to_string(), Preset::by_name(preset)?, weights, path.to_string())
 }
 
 /// Median milliseconds of `repeat` calls of `f`, after one warm-up call (pipeline compiles).
@@ -71,8 +128,8 @@ fn median_ms(repeat: usize, mut f: impl FnMut() -> Result<()>) -> Result<f64> {
 /// Scores and times every model and the reference renderer; writes the chart.
 pub fn run(a: FrontierArgs) -> Result<()> {
     super::output::check_png_out(&a.out)?;
-    let shipped = |p: Preset, w: &[u8]| Model { label: format!("{} (shipped)", p.name), preset: p, weights: w.to_vec(), source: "embedded".into() };
-    let mut models = vec![shipped(Preset::nano(), NANO_PHONG_WEIGHTS), shipped(Preset::tiny(), TINY_PHONG_WEIGHTS)];
+    let shipped = |p: Preset, w: &[u8]| Model::new(format!("{} (shipped)", p.name), p, w.to_vec(), "embedded".into());
+    let mut models = vec![shipped(Preset::nano(), NANO_PHONG_WEIGHTS)?, shipped(Preset::tiny(), TINY_PHONG_WEIGHTS)?];
     for m in &a.models {
         models.push(parse_model(m)?);
     }
@@ -96,17 +153,14 @@ pub fn run(a: FrontierArgs) -> Result<()> {
     let ref_ms = median_ms(a.repeat, || marcher.render(&gpu, &grid, &view, &light, Shader::Phong, 128).map(drop))?;
     let adapter = gpu.info.name.clone();
     let cpu = bench::cpu_model();
-    let points: Vec<(f64, f64, String)> = rows.iter().map(|(m, _, r, ms)| (*ms, r.object_psnr.mean as f64, m.label.clone())).collect();
-    let groups = vec![("RenderNet", points), ("reference renderer (exact, not learned)", vec![(ref_ms, PSNR_CAP, "reference".to_string())])];
-    let slowest = rows.iter().map(|row| row.3).fold(ref_ms, f64::max);
-    let options = Options { cap: Some(Cap { at: PSNR_CAP, note: "exact".into() }), x_range: Some((0.0, 1.15 * slowest)), ..Options::default() };
-    chart::scatter_chart(&a.out, "Speed against accuracy (held-out object PSNR)", &format!("forward ms, 128 px, on {adapter}"), "object PSNR (dB)", &groups, &options)?;
+    write_chart(&a.out, &rows, ref_ms, &adapter)?;
     if a.json {
         let models: Vec<_> = rows
             .iter()
             .map(|(m, params, r, ms)| {
                 json!({
-                    "label": m.label, "preset": m.preset.name, "weights": m.source, "parameters": params,
+                    "label": m.label, "preset": m.preset.name, "arch": family(&m.preset), "weights": m.source, "parameters": params,
+                    "train_images": m.images, "train_seconds": m.train_seconds,
                     "object_psnr": r.object_psnr.mean, "object_psnr_ci95": r.object_psnr.ci95, "psnr": r.mean, "ssim": r.ssim.mean,
                     "black_object_psnr": r.black_object_psnr, "black_psnr": r.black, "samples": r.count, "forward_ms": ms,
                 })

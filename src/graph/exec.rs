@@ -63,6 +63,9 @@ pub struct Executor {
     projector: Option<Tensor>,
     /// Whether runs reuse the memo's GPU objects (see [`Executor::reuse_gpu_objects`]).
     reuse: bool,
+    /// Provenance written into the metadata of saved weights and checkpoints (the trainer
+    /// records the preset, images seen and training seconds), read back by `frontier`.
+    pub notes: std::collections::HashMap<String, String>,
 }
 
 fn bytes(shape: &[usize]) -> u64 {
@@ -101,6 +104,7 @@ impl Executor {
             resize_convs: Vec::new(),
             projector: None,
             reuse: true,
+            notes: Default::default(),
             graph,
         })
     }

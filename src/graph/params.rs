@@ -145,9 +145,10 @@ impl Executor {
             .collect()
     }
 
-    /// Saves the parameters (the shippable weights) to `path`.
+    /// Saves the parameters (the shippable weights) to `path`, with [`Executor::notes`] as
+    /// metadata.
     pub fn save_params(&self, gpu: &Gpu, path: &Path) -> Result<()> {
-        save_safetensors(path, &self.param_tensors(gpu)?, HashMap::new())
+        save_safetensors(path, &self.param_tensors(gpu)?, self.notes.clone())
     }
 
     /// Loads parameters from `path`: a weights file, or a checkpoint whose Adam moments are
@@ -231,7 +232,8 @@ impl Executor {
                 tensors.push((format!("adam.v.{}", info.name), info.shape.clone(), s.to_vec(gpu)?));
             }
         }
-        let meta = HashMap::from([("step".to_string(), self.step.to_string()), ("seed".to_string(), self.seed.to_string())]);
+        let mut meta = self.notes.clone();
+        meta.extend([("step".to_string(), self.step.to_string()), ("seed".to_string(), self.seed.to_string())]);
         save_safetensors(path, &tensors, meta)
     }
 

@@ -121,6 +121,9 @@ impl Inverter {
 
     fn executor(&self, gpu: &Gpu, batch: usize, loss: bool, win: &Window) -> Result<(RenderNet, Executor, Option<(Value, Value)>)> {
         let p = &self.preset;
+        if !p.fully_convolutional() {
+            return Err(Error::Invalid(format!("inverse rendering needs RenderNet weights; preset '{}' is a baseline without normal maps", p.name)));
+        }
         let mut net = RenderNet::build(p, Head::Phong(phong_of(&self.head_light)), batch, [win.cam[2], win.cam[3]], false)?;
         let mut extra = None;
         if loss {

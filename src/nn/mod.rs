@@ -2,6 +2,7 @@
 //! tie its resampling to the reference renderer's images.
 
 pub mod camera;
+pub mod ec;
 pub mod prior;
 pub mod render;
 pub mod rendernet;

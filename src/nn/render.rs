@@ -122,13 +122,13 @@ impl Renderer {
         let f = p.image_for(p.cam) / p.cam;
         let cam_hw = self.size / f;
         let win = match self.margin {
-            Some(m) => object_window(&g, view, cam_hw, m),
-            None => [0, 0, cam_hw, cam_hw],
+            Some(m) if p.fully_convolutional() => object_window(&g, view, cam_hw, m),
+            _ => [0, 0, cam_hw, cam_hw],
         };
         let i = self.net_for(gpu, [win[2], win[3]])?;
         let (_, net, ex) = &mut self.nets[i];
         ex.feed(gpu, net.grid, &camera::input_values(&g))?;
-        ex.feed(gpu, net.pose, &camera::pose_for_view(view, p.input, cam_hw, Some(win)))?;
+        ex.feed(gpu, net.pose, &p.pose_values(view, cam_hw, Some(win)))?;
         if let Some(l) = net.light {
             ex.feed(gpu, l, &camera::light_values(light))?;
         }

@@ -11,6 +11,7 @@ use crate::ops::conv_transpose::ConvTranspose;
 use crate::ops::loss::Loss;
 use crate::ops::phong::Phong;
 use crate::reference::Light;
+pub use super::ec::EcSizes;
 
 /// Sizes of a RenderNet.
 #[derive(Clone, Debug, PartialEq)]
@@ -33,31 +34,45 @@ pub struct Preset {
     pub res2d: usize,
     /// Channels of each stride-2 transposed 4x4 conv; the image side is `cam/2 * 2^len`.
     pub up: Vec<usize>,
+    /// RenderNet, or one of the paper's encoder-decoder baselines (which ignore the fields
+    /// above but `input` and `cam`).
+    pub arch: Arch,
+}
+
+/// The network family of a [`Preset`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum Arch {
+    /// RenderNet: pose resampling, 3D convs, projection unit, 2D convs (fully convolutional
+    /// in the image plane, so it renders camera-grid crops).
+    RenderNet,
+    /// EC or EC-deep (`nn::ec`): canonical grid to a latent vector, fully-connected layers,
+    /// a 2D decoder; whole frames only.
+    Ec(EcSizes),
 }
 
 impl Preset {
     /// The small preset that trains on a 2-core CPU through lavapipe: 32^3 input, 64^3
     /// camera grid, 128x128 image.
     pub fn tiny() -> Preset {
-        Preset { name: "tiny", input: 32, cam: 64, c3: [8, 16], res3d: 0, proj: 64, c2: 32, res2d: 2, up: vec![32, 16] }
+        Preset { name: "tiny", input: 32, cam: 64, c3: [8, 16], res3d: 0, proj: 64, c2: 32, res2d: 2, up: vec![32, 16], arch: Arch::RenderNet }
     }
 
     /// The rung below [`Preset::tiny`] on the speed/accuracy ladder: the same grids and image,
     /// half the channels everywhere and one 2D residual block (about a quarter of the work).
     pub fn nano() -> Preset {
-        Preset { name: "nano", input: 32, cam: 64, c3: [4, 8], res3d: 0, proj: 32, c2: 16, res2d: 1, up: vec![16, 8] }
+        Preset { name: "nano", input: 32, cam: 64, c3: [4, 8], res3d: 0, proj: 32, c2: 16, res2d: 1, up: vec![16, 8], arch: Arch::RenderNet }
     }
 
     /// The rung above [`Preset::tiny`]: the same grids and image, a 2D trunk twice as wide
     /// (64 channels, projection 256->128) with 3 residual blocks, for sharper shading.
     pub fn small() -> Preset {
-        Preset { name: "small", input: 32, cam: 64, c3: [8, 16], res3d: 0, proj: 128, c2: 64, res2d: 3, up: vec![32, 16] }
+        Preset { name: "small", input: 32, cam: 64, c3: [8, 16], res3d: 0, proj: 128, c2: 64, res2d: 3, up: vec![32, 16], arch: Arch::RenderNet }
     }
 
     /// The rung between [`Preset::small`] and [`Preset::paper`]: wider 3D convs (16/32) with
     /// one 3D residual block, a 128-channel 2D trunk with 4 residual blocks.
     pub fn base() -> Preset {
-        Preset { name: "base", input: 32, cam: 64, c3: [16, 32], res3d: 1, proj: 128, c2: 128, res2d: 4, up: vec![64, 32] }
+        Preset { name: "base", input: 32, cam: 64, c3: [16, 32], res3d: 1, proj: 128, c2: 128, res2d: 4, up: vec![64, 32], arch: Arch::RenderNet }
     }
 
     /// The paper's appendix sizes (64^3 input into a 128^3 grid, 512^2 image); for real GPUs.
@@ -72,6 +87,33 @@ impl Preset {
             c2: 1024,
             res2d: 10,
             up: vec![128, 64, 32],
+            arch: Arch::RenderNet,
+        }
+    }
+
+    /// The paper's EC baseline at the size trained here (32^3 grid, 128 px; [`EcSizes::ec`]).
+    pub fn ec() -> Preset {
+        Preset { name: "ec", input: 32, cam: 64, c3: [0, 0], res3d: 0, proj: 0, c2: 0, res2d: 0, up: Vec::new(), arch: Arch::Ec(EcSizes::ec()) }
+    }
+
+    /// The paper's EC-deep baseline ([`EcSizes::ec_deep`]).
+    pub fn ec_deep() -> Preset {
+        Preset { name: "ec-deep", arch: Arch::Ec(EcSizes::ec_deep()), ..Preset::ec() }
+    }
+
+    /// Whether the network renders camera-grid windows (RenderNet) or only whole frames
+    /// (the EC baselines, whose fully-connected layers see the whole frame).
+    pub fn fully_convolutional(&self) -> bool {
+        self.arch == Arch::RenderNet
+    }
+
+    /// The numbers fed to the pose input for `view` on a `cam_hw` camera grid, cropped to
+    /// `crop` (RenderNet only): `camera::pose_for_view`, or its EC features.
+    pub fn pose_values(&self, view: &crate::reference::View, cam_hw: usize, crop: Option<[usize; 4]>) -> [f32; 6] {
+        let pose = crate::nn::camera::pose_for_view(view, self.input, cam_hw, crop);
+        match self.arch {
+            Arch::RenderNet => pose,
+            Arch::Ec(_) => super::ec::pose_features(pose),
         }
     }
 
@@ -83,13 +125,18 @@ impl Preset {
             "small" => Ok(Self::small()),
             "base" => Ok(Self::base()),
             "paper" => Ok(Self::paper()),
-            _ => Err(Error::Invalid(format!("unknown preset '{name}'; expected nano, tiny, small, base or paper"))),
+            "ec" => Ok(Self::ec()),
+            "ec-deep" => Ok(Self::ec_deep()),
+            _ => Err(Error::Invalid(format!("unknown preset '{name}'; expected nano, tiny, small, base, paper, ec or ec-deep"))),
         }
     }
 
     /// Image side for a camera grid of side `cam_hw`.
     pub fn image_for(&self, cam_hw: usize) -> usize {
-        cam_hw / 2 * (1 << self.up.len())
+        match &self.arch {
+            Arch::RenderNet => cam_hw / 2 * (1 << self.up.len()),
+            Arch::Ec(s) => cam_hw * s.image() / self.cam,
+        }
     }
 
     /// Depth of the camera grid after the two 3D convs (stride 2, then depth stride 2).
@@ -172,7 +219,7 @@ impl Builder<'_> {
         self.g.apply(name, Op::Projection, &[x, w, b])
     }
 
-    fn up(&mut self, name: &str, x: Value, cout: usize) -> Result<Value> {
+    pub(crate) fn up(&mut self, name: &str, x: Value, cout: usize) -> Result<Value> {
         let cin = self.g.info(x).shape[1];
         let w = self.param(&format!("{name}.weight"), &[cin, cout, 4, 4], Init::XavierUpsample)?;
         let b = self.param(&format!("{name}.bias"), &[cout], Init::Constant(0.001))?;
@@ -180,14 +227,14 @@ impl Builder<'_> {
         self.g.apply(name, Op::ConvTranspose(t), &[x, w, b])
     }
 
-    fn prelu(&mut self, name: &str, x: Value) -> Result<Value> {
+    pub(crate) fn prelu(&mut self, name: &str, x: Value) -> Result<Value> {
         let c = self.g.info(x).shape[1];
         let a = self.param(&format!("{name}.alpha"), &[c], Init::Constant(0.0))?;
         self.g.apply(name, Op::Prelu, &[x, a])
     }
 
     /// conv - PReLU - conv + identity, the paper's residual block (3^3 or 3x3).
-    fn residual(&mut self, name: &str, x: Value, conv: Conv) -> Result<Value> {
+    pub(crate) fn residual(&mut self, name: &str, x: Value, conv: Conv) -> Result<Value> {
         let c = self.g.info(x).shape[1];
         let h = self.conv(&format!("{name}.conv1"), x, c, conv.clone())?;
         let h = self.prelu(&format!("{name}.act"), h)?;
@@ -195,7 +242,7 @@ impl Builder<'_> {
         self.g.apply(&format!("{name}.add"), Op::Add, &[h, x])
     }
 
-    fn head(&mut self, name: &str, x: Value, c: usize) -> Result<Value> {
+    pub(crate) fn head(&mut self, name: &str, x: Value, c: usize) -> Result<Value> {
         let h = self.conv(name, x, c, Conv::conv2d([3, 3], [1, 1], Padding::Same))?;
         self.g.apply(&format!("{name}.sigmoid"), Op::Sigmoid, &[h])
     }
@@ -224,6 +271,13 @@ impl RenderNet {
         let n = g.info(grid).shape[0];
         if g.info(grid).shape != [n, 1, r, r, r] {
             return Err(Error::Invalid(format!("grid {:?}: preset '{}' needs [N, 1, {r}, {r}, {r}]", g.info(grid).shape, p.name)));
+        }
+        if let Arch::Ec(s) = &p.arch {
+            if cam_hw != [p.cam, p.cam] {
+                let side = s.image();
+                return Err(Error::Invalid(format!("preset '{}' renders whole {side}x{side} frames only (camera window {cam_hw:?} asked)", p.name)));
+            }
+            return super::ec::build_on(g, grid, s, r, head, with_loss);
         }
         let mut b = Builder { g: &mut g };
         let pose = b.g.input("pose", &[n, 6])?;

@@ -71,7 +71,7 @@ impl Batch {
         let [h0, w0, h, w] = window;
         self.grid.extend(grid_values(p, s)?);
         let crop_arg = (h != p.cam || w != p.cam).then_some(window);
-        self.pose.extend(camera::pose_for_view(&s.view, p.input, p.cam, crop_arg));
+        self.pose.extend(p.pose_values(&s.view, p.cam, crop_arg));
         self.light.extend(camera::light_values(&s.light));
         let f = p.image_for(p.cam) / p.cam; // image pixels per camera voxel
         for name in names {

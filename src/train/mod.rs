@@ -16,6 +16,7 @@ use crate::rng::SplitMix64;
 use crate::gpu::Gpu;
 use batch::Batch;
 use lr::exponential_decay;
+use std::collections::HashMap;
 use std::path::PathBuf;
 
 /// How to train.
@@ -156,13 +157,31 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
     let p = &cfg.preset;
     let resume = cfg.resume.as_deref();
     let mut start = 0;
+    // Training images seen and wall seconds before this run (from the checkpoint), so the
+    // weights' metadata gives the whole run's cost across resumes (`frontier` charts it).
+    let (mut images0, mut seconds0) = (0u64, Some(0f64));
     if let Some(r) = resume {
         // The step decides the phase; the checkpoint is loaded into that phase's graph.
         let (_, meta) = crate::graph::params::load_safetensors(r)?;
         start = meta.get("step").and_then(|s| s.parse().ok()).unwrap_or(0);
+        images0 = meta.get("images").and_then(|s| s.parse().ok()).unwrap_or(start * cfg.batch as u64);
+        // Unknown for checkpoints older than this record: left out rather than understated.
+        seconds0 = meta.get("train_seconds").and_then(|s| s.parse().ok());
     }
-    let window = |step: u64| cfg.window.unwrap_or_else(|| window_at(p, step, cfg.steps));
+    let t0 = std::time::Instant::now();
+    let stamp = |ex: &mut Executor, steps_done: u64| {
+        let images = images0 + (steps_done - start) * cfg.batch as u64;
+        ex.notes = HashMap::from([("preset".to_string(), p.name.to_string()), ("images".to_string(), images.to_string())]);
+        if let Some(s0) = seconds0 {
+            ex.notes.insert("train_seconds".to_string(), format!("{:.0}", s0 + t0.elapsed().as_secs_f64()));
+        }
+    };
+    // The EC baselines see the whole frame through fully-connected layers: no crops.
+    let window = |step: u64| if p.fully_convolutional() { cfg.window.unwrap_or_else(|| window_at(p, step, cfg.steps)) } else { p.cam };
     if let Some(w) = cfg.window {
+        if !p.fully_convolutional() && w != p.cam {
+            return Err(Error::Invalid(format!("--crop {w}: preset '{}' trains on whole frames only; leave --crop out", p.name)));
+        }
         if w == 0 || w % 4 != 0 || w > p.cam {
             return Err(Error::Invalid(format!("--crop {w}: must be a multiple of 4 in 4..={}", p.cam)));
         }
@@ -178,6 +197,7 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
     for step in start..cfg.steps {
         let w = window(step);
         if w != cur.window {
+            stamp(&mut cur.ex, step);
             cur.ex.save_checkpoint(gpu, &cfg.out)?;
             cur = crop_phase(gpu, cfg, head, w, Some(&cfg.out))?;
         }
@@ -206,6 +226,7 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
         report(Progress::Step { step: step + 1, loss, lr, window: w, images_per_s: ips });
         let last = step + 1 == cfg.steps;
         if (step + 1) % cfg.eval_every == 0 || last {
+            stamp(&mut cur.ex, step + 1);
             cur.ex.save_checkpoint(gpu, &cfg.out)?;
             let params = cfg.out.with_extension("weights.safetensors");
             cur.ex.save_params(gpu, &params)?;
