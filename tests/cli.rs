@@ -399,6 +399,25 @@ fn render_uses_the_shipped_weights_of_the_preset() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `--quality` and `--target-psnr` pick a shipped model by its measured accuracy: the fastest
+/// that meets the target; a target none meets names the best there is.
+#[test]
+fn render_picks_the_fastest_shipped_model_that_meets_the_target() {
+    let dir = scratch("quality");
+    let png = dir.join("q.png");
+    let p = png.to_str().unwrap();
+    for (flags, model) in [(&["--quality", "fast"][..], "nano"), (&["--quality", "best"], "tiny"), (&["--target-psnr", "19"], "nano"), (&["--target-psnr", "20"], "tiny")] {
+        let out = run_ok(&[&["render", "--size", "32", "--out", p][..], flags].concat());
+        assert!(out.contains(&format!("embedded {model}-phong weights (held-out object PSNR")), "{flags:?}: {out}");
+    }
+    let out = rendernet().args(["render", "--target-psnr", "40", "--out", p]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--target-psnr 40") && err.contains("'tiny'"), "{err}");
+    let out = rendernet().args(["render", "--quality", "fast", "--weights", "w.safetensors", "--out", p]).output().unwrap();
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("--weights"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `stress --unseen DIR` adds one clean case per grid or mesh file of DIR (other files are
 /// skipped), for both methods; a folder without any is refused by flag name.
 #[test]

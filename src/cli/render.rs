@@ -2,7 +2,7 @@
 
 use super::truth::{SceneArgs, load};
 use clap::Args;
-use rendernet::nn::render::{CROP_MARGIN, Renderer};
+use rendernet::nn::render::{CROP_MARGIN, Renderer, SHIPPED};
 use rendernet::metrics::Scores;
 use rendernet::reference::{self, Image, Options, Shader};
 use rendernet::{Gpu, Result};
@@ -49,6 +49,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let (grid, what) = load(&a.scene)?;
     let gpu = Gpu::new()?;
     let preset = a.net.preset()?;
+    let net_preset = preset.name;
     let (bytes, name) = a.net.load_for(a.shader)?;
     let mut net = Renderer::for_shader(&gpu, preset, a.shader, &bytes, &name, a.size)?.with_crop_margin((!a.no_crop).then_some(a.crop_margin));
     let (view, light) = (a.scene.view(), a.scene.light());
@@ -63,7 +64,8 @@ pub fn run(a: RenderArgs) -> Result<()> {
     } else {
         img.save_png(&a.out)?;
     }
-    println!("rendered {} with {name}", a.scene.describe(&what));
+    let measured = SHIPPED.iter().find(|m| a.net.weights.is_none() && m.preset == net_preset).map(|m| format!(" (held-out object PSNR {:.2} dB)", m.object_psnr));
+    println!("rendered {} with {name}{}", a.scene.describe(&what), measured.unwrap_or_default());
     println!(
         "wrote {} in {:.2} s (network forward {:.2} s, on {})",
         a.out.display(),

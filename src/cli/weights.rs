@@ -2,7 +2,7 @@
 //! `stress`.
 
 use clap::Args;
-use rendernet::nn::render::shipped_phong_weights;
+use rendernet::nn::render::{SHIPPED, shipped_for_psnr, shipped_phong_weights};
 use rendernet::nn::rendernet::Preset;
 use rendernet::reference::Shader;
 use rendernet::{Error, Result};
@@ -20,12 +20,38 @@ pub struct WeightsArgs {
     /// small, base or paper (no weights are shipped for the last three: pass --weights).
     #[arg(long, default_value = "tiny")]
     pub preset: String,
+    /// Pick the shipped Phong model instead of --preset: fast (nano), balanced (tiny) or best
+    /// (the most accurate shipped); their measured speed and accuracy are in the README.
+    #[arg(long, value_enum, conflicts_with_all = ["weights", "target_psnr"])]
+    pub quality: Option<Quality>,
+    /// Pick the fastest shipped Phong model whose held-out object PSNR (README table) is at
+    /// least this many dB; an error names the best there is when none reaches it.
+    #[arg(long, value_name = "DB", conflicts_with = "weights", allow_negative_numbers = true)]
+    pub target_psnr: Option<f64>,
+}
+
+/// `--quality`: a rung of the shipped speed/accuracy ladder.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq)]
+pub enum Quality {
+    /// The fastest shipped model.
+    Fast,
+    /// The default: the middle of the ladder.
+    Balanced,
+    /// The most accurate shipped model.
+    Best,
 }
 
 impl WeightsArgs {
-    /// The preset `--preset` names.
+    /// The preset `--preset` names, or the shipped one `--quality` / `--target-psnr` picks.
     pub fn preset(&self) -> Result<Preset> {
-        Preset::by_name(&self.preset)
+        let picked = match (self.quality, self.target_psnr) {
+            (Some(Quality::Fast), _) => SHIPPED[0].preset,
+            (Some(Quality::Balanced), _) => SHIPPED[SHIPPED.len() / 2].preset,
+            (Some(Quality::Best), _) => SHIPPED[SHIPPED.len() - 1].preset,
+            (None, Some(db)) => shipped_for_psnr(db)?.preset,
+            (None, None) => &self.preset,
+        };
+        Preset::by_name(picked)
     }
 
     /// The weights' bytes and a name for messages (Phong weights).

@@ -17,6 +17,35 @@ pub const TINY_PHONG_WEIGHTS: &[u8] = include_bytes!("../../weights/tiny-phong.s
 /// and recipe, shorter; weights/README.md).
 pub const NANO_PHONG_WEIGHTS: &[u8] = include_bytes!("../../weights/nano-phong.safetensors");
 
+/// A shipped Phong model and its measured accuracy, for picking one by quality.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShippedModel {
+    /// Preset name.
+    pub preset: &'static str,
+    /// Held-out object PSNR (dB) on the 200 mixed-shape test views of `data/mixed32`
+    /// (`rendernet frontier`, README table): shapes the network never saw.
+    pub object_psnr: f64,
+}
+
+/// The shipped Phong models, fastest first (each is slower and more accurate than the one
+/// before it; `rendernet frontier` measures both).
+pub const SHIPPED: &[ShippedModel] = &[ShippedModel { preset: "nano", object_psnr: 19.74 }, ShippedModel { preset: "tiny", object_psnr: 21.57 }];
+
+/// The fastest shipped model whose held-out object PSNR is at least `db`; an error naming
+/// the best there is when none reaches it.
+pub fn shipped_for_psnr(db: f64) -> Result<ShippedModel> {
+    if !db.is_finite() {
+        return Err(Error::Invalid(format!("--target-psnr {db}: expected a number of dB")));
+    }
+    SHIPPED.iter().find(|m| m.object_psnr >= db).copied().ok_or_else(|| {
+        let best = SHIPPED.last().expect("at least one shipped model");
+        Error::Invalid(format!(
+            "--target-psnr {db}: no shipped model reaches it; the most accurate, '{}', scores {:.2} dB held-out object PSNR (train a larger preset and pass --weights)",
+            best.preset, best.object_psnr
+        ))
+    })
+}
+
 /// The shipped Phong weights of `preset`, if any.
 pub fn shipped_phong_weights(preset: &Preset) -> Option<&'static [u8]> {
     match preset.name {
