@@ -228,6 +228,9 @@ fn frontier_scores_and_times_every_model() {
     assert_eq!((models[1]["arch"].as_str(), models[1]["train_images"].as_u64()), (Some("RenderNet"), Some(54000)), "{out}");
     assert_eq!((models[3]["arch"].as_str(), models[3]["train_images"].as_u64()), (Some("EC baselines"), Some(1)), "{out}");
     assert!(models[3]["train_seconds"].as_f64().is_some_and(|v| v >= 0.0), "{out}");
+    // EC renders whole frames only: its cropped time is its whole-frame time.
+    assert_eq!(models[3]["forward_ms_cropped"], models[3]["forward_ms"], "{out}");
+    assert!(models[1]["forward_ms_cropped"].as_f64().is_some_and(|v| v > 0.0), "{out}");
     for m in models {
         assert!(m["object_psnr"].as_f64().is_some_and(|v| v.is_finite() && v > 0.0), "{m}");
         assert!(m["forward_ms"].as_f64().is_some_and(|v| v > 0.0), "{m}");

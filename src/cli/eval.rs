@@ -20,7 +20,7 @@ pub struct EvalArgs {
     /// Dataset directory.
     #[arg(long)]
     data: PathBuf,
-    /// Network size the weights belong to.
+    /// Network size the weights belong to (nano, tiny, small, base, paper, ec, ec-deep).
     #[arg(long, default_value = "tiny")]
     preset: String,
     /// Held-out samples to evaluate (0 = all).

@@ -63,7 +63,8 @@ fn family(p: &Preset) -> &'static str {
     if p.fully_convolutional() { "RenderNet" } else { "EC baselines" }
 }
 
-type Row<'a> = (&'a Model, usize, rendernet::train::eval::EvalReport, f64);
+/// A model, its parameter count, held-out scores, whole-frame and cropped forward ms.
+type Row<'a> = (&'a Model, usize, rendernet::train::eval::EvalReport, f64, f64);
 
 /// Four panels: object and full-frame PSNR, each against forward ms (the reference renderer
 /// as the exact point) and against training hours (models whose weights record it).
@@ -74,7 +75,7 @@ fn write_chart(out: &std::path::Path, rows: &[Row], ref_ms: f64, adapter: &str) 
     for timed in [true, false] {
         for (y_label, y) in psnrs {
             let mut groups: Vec<(String, Vec<(f64, f64, String)>)> = Vec::new();
-            for (m, _, r, ms) in rows {
+            for (m, _, r, ms, _) in rows {
                 let x = if timed { Some(*ms) } else { m.train_seconds.map(|s| s / 3600.0) };
                 let Some(x) = x else { continue };
                 let name = family(&m.preset).to_string();
@@ -90,7 +91,7 @@ fn write_chart(out: &std::path::Path, rows: &[Row], ref_ms: f64, adapter: &str) 
                 options.cap = Some(Cap { at: PSNR_CAP, note: "exact".into() });
                 let slowest = rows.iter().map(|row| row.3).fold(ref_ms, f64::max);
                 options.x_range = Some((0.0, 1.15 * slowest));
-                (format!("{y_label} against speed"), format!("forward ms, 128 px, on {adapter}"))
+                (format!("{y_label} against speed"), format!("forward ms, whole 128 px frame, on {adapter}"))
             } else {
                 let longest = rows.iter().filter_map(|row| row.0.train_seconds).fold(0.0, f64::max) / 3600.0;
                 options.x_range = Some((0.0, 1.15 * longest.max(0.1)));
@@ -138,15 +139,23 @@ pub fn run(a: FrontierArgs) -> Result<()> {
     let gpu = Gpu::new()?;
     let clock = bench::default_clock(&gpu);
     let ceiling = bench::fma_ceiling(&gpu, clock, 5)?;
-    // Timing scene: the default bunny, whole 128 px frame (no crop), as `render --no-crop`.
+    // Timing scene: the default bunny, whole 128 px frame (no crop) as `render --no-crop`,
+    // then as `render` runs it by default (cropped to the object).
     let (grid, view, light) = (rendernet::bunny(), View::default(), Light::default());
     let mut rows = Vec::new();
     for m in &models {
         let report = evaluate_bytes(&gpu, &m.preset, head, &m.weights, &m.source, &ds, a.samples)?;
         let mut net = Renderer::new(&gpu, m.preset.clone(), &m.weights, &m.source, 128)?.with_crop_margin(None);
         let ms = median_ms(a.repeat, || net.render(&gpu, &grid, &view, &light).map(drop))?;
+        // As `render` runs it: RenderNet on the object's window only (EC cannot crop).
+        let cropped = if m.preset.fully_convolutional() {
+            let mut net = Renderer::new(&gpu, m.preset.clone(), &m.weights, &m.source, 128)?;
+            median_ms(a.repeat, || net.render(&gpu, &grid, &view, &light).map(drop))?
+        } else {
+            ms
+        };
         let params = rendernet::graph::params::parse_safetensors(&m.weights, &m.source)?.0.values().map(|(_, v)| v.len()).sum::<usize>();
-        rows.push((m, params, report, ms));
+        rows.push((m, params, report, ms, cropped));
     }
     let opts = rendernet::reference::Options { supersample: 2, ..Default::default() };
     let marcher = RayMarcher::new(&gpu).with_options(opts);
@@ -157,12 +166,12 @@ pub fn run(a: FrontierArgs) -> Result<()> {
     if a.json {
         let models: Vec<_> = rows
             .iter()
-            .map(|(m, params, r, ms)| {
+            .map(|(m, params, r, ms, cropped)| {
                 json!({
                     "label": m.label, "preset": m.preset.name, "arch": family(&m.preset), "weights": m.source, "parameters": params,
                     "train_images": m.images, "train_seconds": m.train_seconds,
                     "object_psnr": r.object_psnr.mean, "object_psnr_ci95": r.object_psnr.ci95, "psnr": r.mean, "ssim": r.ssim.mean,
-                    "black_object_psnr": r.black_object_psnr, "black_psnr": r.black, "samples": r.count, "forward_ms": ms,
+                    "black_object_psnr": r.black_object_psnr, "black_psnr": r.black, "samples": r.count, "forward_ms": ms, "forward_ms_cropped": cropped,
                 })
             })
             .collect();
@@ -171,9 +180,9 @@ pub fn run(a: FrontierArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&j).expect("plain JSON"));
     } else {
         println!("adapter: {adapter}; cpu: {}; FMA ceiling {ceiling:.1} GFLOP/s (same run)", cpu.as_deref().unwrap_or("unknown"));
-        println!("{:<18} {:>10} {:>20} {:>10} {:>8} {:>11}", "model", "parameters", "object PSNR (black)", "full PSNR", "SSIM", "forward ms");
-        for (m, params, r, ms) in &rows {
-            println!("{:<18} {params:>10} {:>12.2} ({:>5.2}) {:>10.2} {:>8.3} {ms:>11.1}", m.label, r.object_psnr.mean, r.black_object_psnr, r.mean, r.ssim.mean);
+        println!("{:<18} {:>10} {:>20} {:>10} {:>8} {:>11} {:>11}", "model", "parameters", "object PSNR (black)", "full PSNR", "SSIM", "forward ms", "cropped ms");
+        for (m, params, r, ms, cropped) in &rows {
+            println!("{:<18} {params:>10} {:>12.2} ({:>5.2}) {:>10.2} {:>8.3} {ms:>11.1} {cropped:>11.1}", m.label, r.object_psnr.mean, r.black_object_psnr, r.mean, r.ssim.mean);
         }
         println!("{:<18} {:>10} {:>20} {:>10} {:>8} {:>11.1}", "reference", "-", "exact", "-", "-", ref_ms);
         println!("chart: {}", a.out.display());

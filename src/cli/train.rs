@@ -11,7 +11,8 @@ use std::path::PathBuf;
 #[derive(Args)]
 pub struct TrainArgs {
     /// Network size, smallest first: nano, tiny (the default render's), small, base (all
-    /// train on a CPU through lavapipe; base slowly), or paper (the appendix; real GPUs).
+    /// train on a CPU through lavapipe; base slowly), or paper (the appendix; real GPUs); or
+    /// the paper's baselines ec and ec-deep (whole frames, no crops; BCE on the image).
     #[arg(long, default_value = "tiny")]
     preset: String,
     /// Dataset directory (its manifest decides the shader: phong trains the normal, albedo and

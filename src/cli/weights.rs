@@ -17,7 +17,8 @@ pub struct WeightsArgs {
     #[arg(long)]
     pub weights: Option<PathBuf>,
     /// Network size the weights belong to: tiny (default), nano (faster, less accurate),
-    /// small, base or paper (no weights are shipped for the last three: pass --weights).
+    /// small, base or paper, or the baselines ec and ec-deep (no weights are shipped for
+    /// these: pass --weights).
     #[arg(long, default_value = "tiny")]
     pub preset: String,
     /// Pick the shipped Phong model instead of --preset: fast (nano), balanced (tiny) or best
