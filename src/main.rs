@@ -56,7 +56,8 @@ enum Cmd {
     Stress(cli::stress::StressArgs),
     /// Speed against accuracy: score each model (the shipped one and any --model) on a
     /// dataset's held-out split, time its forward on this adapter beside the reference
-    /// renderer's, and chart object PSNR against forward milliseconds (PNG; table or JSON).
+    /// renderer's, and chart object and full-frame PSNR against forward milliseconds and
+    /// training hours (PNG; table or JSON), RenderNet presets and EC baselines alike.
     Frontier(cli::frontier::FrontierArgs),
     /// Time the conv, transposed-conv and projection kernels (reference and tiled) on shapes
     /// from the RenderNet presets: median ms and GFLOP/s per pass, GPU timestamps when the

@@ -22,14 +22,16 @@ pub struct FrontierArgs {
     /// Held-out samples per model, spread over the split (0 = all).
     #[arg(long, default_value_t = 100)]
     samples: usize,
-    /// A model to add: LABEL=PRESET:WEIGHTS (e.g. nano=nano:nano.weights.safetensors);
-    /// repeat the flag for more. The shipped nano and tiny weights are always included.
+    /// A model to add: LABEL=PRESET:WEIGHTS (e.g. ec=ec:weights/ladder/ec-phong-2000.safetensors;
+    /// presets nano, tiny, small, base, paper, ec, ec-deep); repeat the flag for more. The
+    /// shipped nano and tiny weights are always included.
     #[arg(long = "model", value_name = "LABEL=PRESET:WEIGHTS")]
     models: Vec<String>,
     /// Timed forwards per model (the median is reported), after one warm-up.
     #[arg(long, default_value_t = 5)]
     repeat: usize,
-    /// Chart: object PSNR against forward milliseconds, one point per model.
+    /// Chart: object and full-frame PSNR against whole-frame forward milliseconds and against
+    /// training hours (from the weights' metadata), one point per model.
     #[arg(long, default_value = "frontier.png")]
     out: PathBuf,
     /// Print JSON instead of a table.
