@@ -6,7 +6,7 @@ use clap::Args;
 use rendernet::chart::{self, Cap, Options};
 use rendernet::data::Dataset;
 use rendernet::metrics::PSNR_CAP;
-use rendernet::nn::render::{NANO_PHONG_WEIGHTS, Renderer, TINY_PHONG_WEIGHTS};
+use rendernet::nn::render::{CROP_MARGIN, NANO_PHONG_WEIGHTS, Renderer, TINY_PHONG_WEIGHTS};
 use rendernet::train::{eval::evaluate_bytes, head_for};
 use rendernet::{Error, Gpu, Light, Preset, RayMarcher, Result, Shader, View, bench};
 use serde_json::json;
@@ -49,14 +49,16 @@ struct Model {
     /// records them; absent in files written before it did).
     images: Option<u64>,
     train_seconds: Option<f64>,
+    parameters: usize,
 }
 
 impl Model {
     fn new(label: String, preset: Preset, weights: Vec<u8>, source: String) -> Result<Model> {
-        let meta = rendernet::graph::params::parse_safetensors(&weights, &source)?.1;
+        let (tensors, meta) = rendernet::graph::params::parse_safetensors(&weights, &source)?;
         let images = meta.get("images").and_then(|v| v.parse().ok());
         let train_seconds = meta.get("train_seconds").and_then(|v| v.parse().ok());
-        Ok(Model { label, preset, weights, source, images, train_seconds })
+        let parameters = tensors.values().map(|(_, v)| v.len()).sum();
+        Ok(Model { label, preset, weights, source, images, train_seconds, parameters })
     }
 }
 
@@ -65,8 +67,8 @@ fn family(p: &Preset) -> &'static str {
     if p.fully_convolutional() { "RenderNet" } else { "EC baselines" }
 }
 
-/// A model, its parameter count, held-out scores, whole-frame and cropped forward ms.
-type Row<'a> = (&'a Model, usize, rendernet::train::eval::EvalReport, f64, f64);
+/// A model, its held-out scores, whole-frame and cropped forward ms.
+type Row<'a> = (&'a Model, rendernet::train::eval::EvalReport, f64, f64);
 
 /// Four panels: object and full-frame PSNR, each against forward ms (the reference renderer
 /// as the exact point) and against training hours (models whose weights record it).
@@ -77,7 +79,7 @@ fn write_chart(out: &std::path::Path, rows: &[Row], ref_ms: f64, adapter: &str) 
     for timed in [true, false] {
         for (y_label, y) in psnrs {
             let mut groups: Vec<(String, Vec<(f64, f64, String)>)> = Vec::new();
-            for (m, _, r, ms, _) in rows {
+            for (m, r, ms, _) in rows {
                 let x = if timed { Some(*ms) } else { m.train_seconds.map(|s| s / 3600.0) };
                 let Some(x) = x else { continue };
                 let name = family(&m.preset).to_string();
@@ -91,7 +93,7 @@ fn write_chart(out: &std::path::Path, rows: &[Row], ref_ms: f64, adapter: &str) 
             let (title, x_label) = if timed {
                 groups.push(("reference renderer (exact, not learned)".into(), vec![(ref_ms, PSNR_CAP, "reference".into())]));
                 options.cap = Some(Cap { at: PSNR_CAP, note: "exact".into() });
-                let slowest = rows.iter().map(|row| row.3).fold(ref_ms, f64::max);
+                let slowest = rows.iter().map(|row| row.2).fold(ref_ms, f64::max);
                 options.x_range = Some((0.0, 1.15 * slowest));
                 (format!("{y_label} against speed"), format!("forward ms, whole 128 px frame, on {adapter}"))
             } else {
@@ -151,13 +153,12 @@ pub fn run(a: FrontierArgs) -> Result<()> {
         let ms = median_ms(a.repeat, || net.render(&gpu, &grid, &view, &light).map(drop))?;
         // As `render` runs it: RenderNet on the object's window only (EC cannot crop).
         let cropped = if m.preset.fully_convolutional() {
-            let mut net = Renderer::new(&gpu, m.preset.clone(), &m.weights, &m.source, 128)?;
+            let mut net = net.with_crop_margin(Some(CROP_MARGIN));
             median_ms(a.repeat, || net.render(&gpu, &grid, &view, &light).map(drop))?
         } else {
             ms
         };
-        let params = rendernet::graph::params::parse_safetensors(&m.weights, &m.source)?.0.values().map(|(_, v)| v.len()).sum::<usize>();
-        rows.push((m, params, report, ms, cropped));
+        rows.push((m, report, ms, cropped));
     }
     let opts = rendernet::reference::Options { supersample: 2, ..Default::default() };
     let marcher = RayMarcher::new(&gpu).with_options(opts);
@@ -168,9 +169,9 @@ pub fn run(a: FrontierArgs) -> Result<()> {
     if a.json {
         let models: Vec<_> = rows
             .iter()
-            .map(|(m, params, r, ms, cropped)| {
+            .map(|(m, r, ms, cropped)| {
                 json!({
-                    "label": m.label, "preset": m.preset.name, "arch": family(&m.preset), "weights": m.source, "parameters": params,
+                    "label": m.label, "preset": m.preset.name, "arch": family(&m.preset), "weights": m.source, "parameters": m.parameters,
                     "train_images": m.images, "train_seconds": m.train_seconds,
                     "object_psnr": r.object_psnr.mean, "object_psnr_ci95": r.object_psnr.ci95, "psnr": r.mean, "ssim": r.ssim.mean,
                     "black_object_psnr": r.black_object_psnr, "black_psnr": r.black, "samples": r.count, "forward_ms": ms, "forward_ms_cropped": cropped,
@@ -183,8 +184,8 @@ pub fn run(a: FrontierArgs) -> Result<()> {
     } else {
         println!("adapter: {adapter}; cpu: {}; FMA ceiling {ceiling:.1} GFLOP/s (same run)", cpu.as_deref().unwrap_or("unknown"));
         println!("{:<18} {:>10} {:>20} {:>10} {:>8} {:>11} {:>11}", "model", "parameters", "object PSNR (black)", "full PSNR", "SSIM", "forward ms", "cropped ms");
-        for (m, params, r, ms, cropped) in &rows {
-            println!("{:<18} {params:>10} {:>12.2} ({:>5.2}) {:>10.2} {:>8.3} {ms:>11.1} {cropped:>11.1}", m.label, r.object_psnr.mean, r.black_object_psnr, r.mean, r.ssim.mean);
+        for (m, r, ms, cropped) in &rows {
+            println!("{:<18} {:>10} {:>12.2} ({:>5.2}) {:>10.2} {:>8.3} {ms:>11.1} {cropped:>11.1}", m.label, m.parameters, r.object_psnr.mean, r.black_object_psnr, r.mean, r.ssim.mean);
         }
         println!("{:<18} {:>10} {:>20} {:>10} {:>8} {:>11.1}", "reference", "-", "exact", "-", "-", ref_ms);
         println!("chart: {}", a.out.display());
