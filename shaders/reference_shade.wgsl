@@ -13,6 +13,10 @@ struct Params {
     crease_cos: f32, // neighbouring normals with a smaller cosine mark a crease
     crease_step: i32, // sub-pixels between the normals compared: half a voxel or one pixel,
                       // as the smoothed normals turn over a voxel or two, not over one pixel
+    sc_step: f32,     // sub-pixels over which the slope of n.v is measured (two voxels)
+    sc_half: f32,     // half an output pixel in sub-pixels: where the slope is measured
+    sc_min_bend: f32, // how much n.v must rise on both sides (second difference) to count
+    sc_max_cos: f32,  // n.v above this (facing the camera) never holds a suggestive contour
 }
 @group(0) @binding(0) var<uniform> p: Params;
 @group(0) @binding(1) var<storage, read> gbuf: array<f32>;
@@ -52,6 +56,47 @@ fn on_line(x: i32, y: i32) -> bool {
     return false;
 }
 
+// n.v (v = +z, the camera is orthographic) at a sub-pixel, or -2 where the ray missed or the
+// surface lies more than depth_jump from depth z (the far side of an occluding contour).
+fn ndv_near(x: i32, y: i32, z: f32) -> f32 {
+    if (g(0u, x, y) == 0.0 || abs(g(1u, x, y) - z) > p.depth_jump) { return -2.0; }
+    return g(4u, x, y);
+}
+
+// n.v a distance t (sub-pixels) along image direction d from (x, y), nearest sub-pixel.
+fn ndv_along(x: i32, y: i32, d: vec2<f32>, t: f32, z: f32) -> f32 {
+    return ndv_near(x + i32(round(d.x * t)), y + i32(round(d.y * t)), z);
+}
+
+// Suggestive contours (DeCarlo et al. 2003): where the radial curvature crosses zero with a
+// positive derivative along w, the view vector projected on the tangent plane; equivalently,
+// where n.v has a positive local minimum along w. With an orthographic camera w projects onto
+// the image along the normal's image-plane part (n.x, -n.y in rows, which grow downwards).
+// The slope of n.v is measured over sc_step (a couple of voxels, wider than the grid's
+// ripples) at half a pixel (sc_half) either side of the sub-pixel: the line is drawn where it
+// turns from falling to rising, so it is about a pixel wide whatever sc_step is. sc_min_bend
+// keeps faint bends out: n.v must rise by half that much on each side, so a ripple at a
+// convex edge (n.v rising on one side only) draws nothing.
+fn on_suggestive(x: i32, y: i32) -> bool {
+    let n = normal(x, y);
+    let t = length(n.xy);
+    if (n.z > p.sc_max_cos || t < 1e-4) { return false; }
+    let d = vec2<f32>(n.x, -n.y) / t;
+    let z = g(1u, x, y);
+    let h = p.sc_step;
+    let e = p.sc_half;
+    let far_pos = ndv_along(x, y, d, h, z);
+    let far_neg = ndv_along(x, y, d, -h, z);
+    let a1 = ndv_along(x, y, d, e + 0.5 * h, z);
+    let a0 = ndv_along(x, y, d, e - 0.5 * h, z);
+    let b1 = ndv_along(x, y, d, 0.5 * h - e, z);
+    let b0 = ndv_along(x, y, d, -0.5 * h - e, z);
+    if (min(min(far_pos, far_neg), min(min(a1, a0), min(b1, b0))) < -1.5) { return false; }
+    let after = a1 - a0;
+    let before = b1 - b0;
+    return before < 0.0 && after >= 0.0 && min(far_pos, far_neg) - n.z > 0.5 * p.sc_min_bend;
+}
+
 fn shade(x: i32, y: i32) -> vec3<f32> {
     if (g(0u, x, y) == 0.0) {
         return select(vec3<f32>(0.0), vec3<f32>(1.0), p.mode == 6u);
@@ -74,12 +119,12 @@ fn shade(x: i32, y: i32) -> vec3<f32> {
         case 3u: { return vec3<f32>((1.0 + g(1u, x, y)) * 0.5); }
         case 4u: { return vec3<f32>(1.0); }
         case 5u: {
-            if (on_line(x, y)) { return vec3<f32>(0.0); }
+            if (on_line(x, y) || on_suggestive(x, y)) { return vec3<f32>(0.0); }
             // Four bands: 0, 1/3, 2/3, 1 of the diffuse term.
             let q = ceil(clamp(ndl, 0.0, 1.0) * 3.0) / 3.0;
             return clamp(colour * albedo * (p.ambient + p.kd * q), vec3<f32>(0.0), vec3<f32>(1.0));
         }
-        case 6u: { return select(vec3<f32>(1.0), vec3<f32>(0.0), on_line(x, y)); }
+        case 6u: { return select(vec3<f32>(1.0), vec3<f32>(0.0), on_line(x, y) || on_suggestive(x, y)); }
         default: { return vec3<f32>(g(8u, x, y)); }
     }
 }

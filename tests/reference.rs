@@ -350,3 +350,73 @@ fn ambient_occlusion_darkens_an_inner_corner() {
     assert!(darkened as f64 > 0.05 * on_slab.len() as f64, "the wall darkens {darkened} of {} pixels", on_slab.len());
     assert!(kept as f64 > 0.3 * on_slab.len() as f64, "only {kept} pixels kept their value");
 }
+
+/// Contour images with and without suggestive contours (`suggestive_bend` infinite), two
+/// sub-pixels per axis as the datasets render them.
+fn contours_with_and_without_suggestive(grid: &VoxelGrid, view: &View) -> (Image, Image) {
+    let at = |bend: f32| {
+        let o = Options { supersample: 2, suggestive_bend: bend, ..Options::default() };
+        RayMarcher::new(gpu()).with_options(o).render(gpu(), grid, view, &Light::default(), Shader::Contour, S).unwrap()
+    };
+    (at(Options::default().suggestive_bend), at(f32::INFINITY))
+}
+
+/// A sphere's `n.v` only grows from the rim inwards, so it has no suggestive contour: the
+/// contour image is its silhouette alone, the same with suggestive contours on or off.
+#[test]
+fn a_sphere_has_no_suggestive_contours() {
+    let (on, off) = contours_with_and_without_suggestive(&sphere_grid(), &sphere_view());
+    let lines = off.data.iter().filter(|&&v| v < 0.5).count();
+    assert!(lines > 50, "the silhouette drew only {lines} pixels");
+    assert_eq!(on.data, off.data, "suggestive contours drawn on a sphere");
+}
+
+/// A Gaussian bump on a flat slab, seen obliquely: `n.v` dips on the bump's flanks, so
+/// suggestive contours appear there (and nowhere on the flat, where `n.v` is constant),
+/// inside the object, where neither the silhouette nor a depth jump draws a line.
+#[test]
+fn a_bump_seen_obliquely_has_suggestive_contours_on_it() {
+    // The steepest flank (31 degrees) stays below the line of sight (35 degrees), so no part
+    // of the bump hides another: every line on it is a suggestive contour.
+    let (base, amp, sigma) = (14.0, 6.0, 6.0);
+    let c = N as f64 / 2.0 - 0.5;
+    let surface = |d: f64, w: f64| base + amp * (-((d - c).powi(2) + (w - c).powi(2)) / (2.0 * sigma * sigma)).exp();
+    // A one-voxel ramp to 0 on every side, a few voxels inside the grid's faces, so the slab
+    // has clean edges rather than the grid's boundary.
+    let occ = (0..N * N * N)
+        .map(|i| {
+            let (d, h, w) = (i / (N * N), (i / N) % N, i % N);
+            let (d, h, w) = (d as f64, h as f64, w as f64);
+            let inside = (surface(d, w) - h).min(h - 3.0).min(d - 3.0).min(N as f64 - 4.0 - d).min(w - 3.0).min(N as f64 - 4.0 - w);
+            (0.5 + inside).clamp(0.0, 1.0) as f32
+        })
+        .collect();
+    let grid = VoxelGrid::new([N; 3], occ).unwrap();
+    let view = View { azimuth: 20.0, elevation: 55.0, radius: 2.4 };
+    let (on, off) = contours_with_and_without_suggestive(&grid, &view);
+    // The bump's axis (object x = z = 0, up the y axis) in the image: pixels within 3 sigma
+    // of it, at any height, count as on the bump.
+    let r = view.rotation().as_dmat3();
+    let fov = view.fov();
+    let to_px = |p: glam::DVec3| {
+        let q = r * p;
+        (q.x / fov + 0.5) * S as f64 - 0.5
+    };
+    let unit = N as f64;
+    let (x_lo, x_hi) = (to_px(glam::DVec3::new(0.0, 0.0, 0.0)), to_px(glam::DVec3::new(0.0, 1.0, 0.0)));
+    let reach = 3.0 * sigma / unit / fov * S as f64;
+    let mut extra = 0;
+    for i in 0..S as usize {
+        for j in 0..S as usize {
+            let (a, b) = (on.get(0, i, j), off.get(0, i, j));
+            assert!(a <= b, "suggestive contours only add ink, at ({i}, {j})");
+            if a < b - 0.2 {
+                extra += 1;
+                let j = j as f64;
+                assert!(j > x_lo.min(x_hi) - reach && j < x_lo.max(x_hi) + reach, "a suggestive line off the bump, at ({i}, {j})");
+            }
+        }
+    }
+    eprintln!("bump: {extra} pixels of suggestive contour");
+    assert!(extra >= 5, "only {extra} pixels of suggestive contour on the bump");
+}

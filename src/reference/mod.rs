@@ -46,9 +46,12 @@ pub enum Shader {
     Depth,
     /// Coverage: 1 where the ray hits (fractional at edges when supersampled). Grey.
     Mask,
-    /// Four-band diffuse (0, 1/3, 2/3, 1 of the diffuse term) plus black outlines, RGB.
+    /// Four-band diffuse (0, 1/3, 2/3, 1 of the diffuse term) plus the [`Shader::Contour`]
+    /// lines in black, RGB.
     Toon,
-    /// Occluding contours and creases as black lines on white. Grey.
+    /// Black lines on white: occluding contours (silhouette and depth jumps), creases, and
+    /// suggestive contours (DeCarlo et al. 2003: minima of `n.v` along the view direction
+    /// projected on the surface, see [`Options::suggestive_bend`]). Grey.
     Contour,
     /// Ambient occlusion, 1 = unoccluded: 64 stratified cosine-weighted directions, each
     /// marched a short way (deterministic, noise-free). Grey.
@@ -123,6 +126,17 @@ pub struct Options {
     pub crease_degrees: f32,
     /// A neighbour farther by more than this many pixel widths marks an occluding contour.
     pub depth_jump_pixels: f32,
+    /// Suggestive contours: how much `n.v` must rise on both sides of a minimum
+    /// ([`Options::suggestive_step_voxels`] away) for it to be drawn. Lower draws fainter bends
+    /// and, below ~0.05, the voxel grid's ripples as specks; `f32::INFINITY` turns suggestive
+    /// contours off.
+    pub suggestive_bend: f32,
+    /// Suggestive contours: the distance in voxels over which the slope of `n.v` is measured.
+    /// Two voxels average out the ripples a voxel grid's normals keep at one voxel's period.
+    pub suggestive_step_voxels: f32,
+    /// Suggestive contours are drawn only where `n.v` is below this (surfaces turning away
+    /// from the camera), as DeCarlo et al. fade them out where the surface faces the viewer.
+    pub suggestive_max_cos: f32,
 }
 
 impl Default for Options {
@@ -134,6 +148,9 @@ impl Default for Options {
             ao_radius: 0.2,
             crease_degrees: 30.0,
             depth_jump_pixels: 4.0,
+            suggestive_bend: 0.1,
+            suggestive_step_voxels: 2.0,
+            suggestive_max_cos: 0.8,
         }
     }
 }
@@ -190,6 +207,10 @@ struct ShadeParams {
     depth_jump: f32,
     crease_cos: f32,
     crease_step: i32,
+    sc_step: f32,
+    sc_half: f32,
+    sc_min_bend: f32,
+    sc_max_cos: f32,
 }
 
 /// The reference (conventional, not learned) renderer: marches rays through the grid's
@@ -272,8 +293,11 @@ impl RayMarcher {
         view.validate().map_err(|m| Error::Invalid(format!("{op}: view: {m}")))?;
         light.validate().map_err(|m| Error::Invalid(format!("{op}: light: {m}")))?;
         let step_ok = o.step > 0.0 && o.step <= 2.0;
-        if !(1..=8).contains(&o.supersample) || !step_ok || o.ao_dirs_sqrt == 0 || !o.ao_radius.is_finite() {
-            return Err(Error::Invalid(format!("{op}: options {o:?} out of range (supersample 1..=8, step in (0, 2], ao_dirs_sqrt >= 1)")));
+        let sc_ok = o.suggestive_bend >= 0.0 && !o.suggestive_max_cos.is_nan() && o.suggestive_step_voxels > 0.0 && o.suggestive_step_voxels <= 8.0;
+        if !(1..=8).contains(&o.supersample) || !step_ok || o.ao_dirs_sqrt == 0 || !o.ao_radius.is_finite() || !sc_ok {
+            return Err(Error::Invalid(format!(
+                "{op}: options {o:?} out of range (supersample 1..=8, step in (0, 2], ao_dirs_sqrt >= 1, suggestive_bend >= 0, suggestive_step_voxels in (0, 8])"
+            )));
         }
         let size = size as u32;
         let n = size * o.supersample;
@@ -298,6 +322,9 @@ impl RayMarcher {
         let wg = [n.div_ceil(8), n.div_ceil(8), 1];
         gpu.dispatch(pass, MARCH, "reference_march", &mp, &[Arg::R(&grid.occupancy), colour, Arg::W(&gbuf)], wg)?;
         let l = light.direction();
+        // Half a voxel's width in sub-pixels (at least one output pixel): wider spacing would
+        // let thin parts (one-voxel legs) compare their two sides.
+        let crease_step = ((0.5 * n as f32 / (fov * unit)).round() as i32).max(o.supersample as i32);
         for &(shader, out) in outs {
             let sp = ShadeParams {
                 size,
@@ -312,9 +339,12 @@ impl RayMarcher {
                 shininess: light.shininess,
                 depth_jump: o.depth_jump_pixels * fov / size as f32,
                 crease_cos: o.crease_degrees.to_radians().cos(),
-                // Half a voxel's width in sub-pixels (at least one output pixel): wider spacing
-                // would let thin parts (one-voxel legs) compare their two sides.
-                crease_step: ((0.5 * n as f32 / (fov * unit)).round() as i32).max(o.supersample as i32),
+                crease_step,
+                sc_step: (o.suggestive_step_voxels * n as f32 / (fov * unit)).max(o.supersample as f32),
+                sc_half: 0.5 * o.supersample as f32,
+                sc_min_bend: o.suggestive_bend,
+                sc_max_cos: o.suggestive_max_cos,
+
             };
             let wg = [size.div_ceil(8), size.div_ceil(8), 1];
             gpu.dispatch(pass, SHADE, "reference_shade", &sp, &[Arg::R(&gbuf), Arg::W(out)], wg)?;
