@@ -186,7 +186,9 @@ fn grids_past_the_device_limits_run_or_fail_clearly() {
 
 /// A network trained on another shader's dataset (ambient occlusion: one image head, no
 /// light) renders through `render --shader ao --weights`, with the reference's AO beside it;
-/// without --weights, `--shader ao` is refused by name (only Phong weights are shipped).
+/// without --weights `--shader ao` takes the shipped tiny AO weights (and claims no Phong
+/// score), and `eval` scores them, refusing a `--shader` the dataset does not hold. A shader
+/// with no shipped weights is refused by name, listing the shipped ones.
 #[test]
 fn weights_of_another_shader_render_with_its_head() {
     let dir = std::env::temp_dir().join(format!("rendernet-ao-test-{}", std::process::id()));
@@ -200,9 +202,17 @@ fn weights_of_another_shader_render_with_its_head() {
     assert!(out.contains("object PSNR") && out.contains("mask IoU"), "{out}");
     let img = image::open(&png).unwrap();
     assert_eq!((img.width(), img.height()), (128, 64), "network and reference side by side");
-    let refused = Command::new(env!("CARGO_BIN_EXE_rendernet")).args(["render", "--shader", "ao", "--out", png.to_str().unwrap()]).output().unwrap();
+    let out = rendernet(&["render", "--shader", "ao", "--size", "64", "--out", png.to_str().unwrap()]);
+    assert!(out.contains("embedded tiny-ao weights") && !out.contains("PSNR"), "{out}");
+    let out = rendernet(&["eval", "--shader", "ao", "--data", d, "--json"]);
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"));
+    assert!(j["object_psnr_mean"].as_f64().is_some_and(|v| v > j["black_image_object_psnr"].as_f64().unwrap()), "{out}");
+    let refused = Command::new(env!("CARGO_BIN_EXE_rendernet")).args(["eval", "--shader", "phong", "--data", d]).output().unwrap();
     let err = String::from_utf8_lossy(&refused.stderr);
-    assert!(!refused.status.success() && err.contains("--shader ao") && err.contains("--weights"), "{err}");
+    assert!(!refused.status.success() && err.contains("--shader phong") && err.contains("holds ao images"), "{err}");
+    let refused = Command::new(env!("CARGO_BIN_EXE_rendernet")).args(["render", "--shader", "contour", "--out", png.to_str().unwrap()]).output().unwrap();
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success() && err.contains("--shader contour") && err.contains("ao (tiny)") && err.contains("--weights"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -5,8 +5,11 @@ use clap::Args;
 use rendernet::data::Dataset;
 use rendernet::nn::rendernet::Preset;
 use rendernet::train::eval::{EvalReport, Interval};
+use rendernet::nn::render::shipped_weights;
+use rendernet::reference::Shader;
+use rendernet::train::eval::evaluate_bytes;
 use rendernet::train::{eval::evaluate, head_for};
-use rendernet::{Gpu, Result};
+use rendernet::{Error, Gpu, Result};
 use serde_json::{Map, Value, json};
 use std::path::PathBuf;
 
@@ -14,9 +17,14 @@ use std::path::PathBuf;
 #[derive(Args)]
 pub struct EvalArgs {
     /// Weights (safetensors, as written by `train` or shipped in weights/; a training
-    /// checkpoint works too, its Adam state ignored).
+    /// checkpoint works too, its Adam state ignored). Default: the embedded weights of
+    /// --preset for the dataset's shader, where some are shipped.
     #[arg(long)]
-    weights: PathBuf,
+    weights: Option<PathBuf>,
+    /// The shader the weights were trained for; must be the dataset's (its manifest.json
+    /// names it). A check: evaluating AO weights on Phong images is an error, not a score.
+    #[arg(long, value_parser = super::truth::parse_shader)]
+    shader: Option<Shader>,
     /// Dataset directory.
     #[arg(long)]
     data: PathBuf,
@@ -36,7 +44,25 @@ pub fn run(a: EvalArgs) -> Result<()> {
     let gpu = Gpu::new()?;
     let ds = Dataset::open(&a.data)?;
     let p = Preset::by_name(&a.preset)?;
-    let r = evaluate(&gpu, &p, head_for(&ds)?, &a.weights, &ds, a.samples)?;
+    let shader = ds.manifest.shader_kind()?;
+    if let Some(want) = a.shader.filter(|&s| s != shader) {
+        return Err(Error::Invalid(format!(
+            "--shader {}: {} holds {} images (manifest.json); evaluate on a dataset made with `rendernet dataset --shader {0}`",
+            want.name(),
+            a.data.display(),
+            shader.name()
+        )));
+    }
+    let head = head_for(&ds)?;
+    let r = match &a.weights {
+        Some(w) => evaluate(&gpu, &p, head, w, &ds, a.samples)?,
+        None => {
+            let w = shipped_weights(&p, shader).ok_or_else(|| {
+                Error::Invalid(format!("no {}-{} weights are shipped; pass --weights FILE", p.name, shader.name()))
+            })?;
+            evaluate_bytes(&gpu, &p, head, w, &format!("embedded {}-{} weights", p.name, shader.name()), &ds, a.samples)?
+        }
+    };
     if a.json {
         println!("{}", to_json(&r));
     } else {

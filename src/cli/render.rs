@@ -64,7 +64,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     } else {
         img.save_png(&a.out)?;
     }
-    let measured = SHIPPED.iter().find(|m| a.net.weights.is_none() && m.preset == net_preset).map(|m| format!(" (held-out object PSNR {:.2} dB)", m.object_psnr));
+    let measured = SHIPPED.iter().find(|m| a.net.weights.is_none() && a.shader == Shader::Phong && m.preset == net_preset).map(|m| format!(" (held-out object PSNR {:.2} dB)", m.object_psnr));
     println!("rendered {} with {name}{}", a.scene.describe(&what), measured.unwrap_or_default());
     println!(
         "wrote {} in {:.2} s (network forward {:.2} s, on {})",

@@ -2,7 +2,7 @@
 //! `stress`.
 
 use clap::Args;
-use rendernet::nn::render::{SHIPPED, shipped_for_psnr, shipped_phong_weights};
+use rendernet::nn::render::{SHIPPED, shipped_for_psnr, shipped_shaders, shipped_weights};
 use rendernet::nn::rendernet::Preset;
 use rendernet::reference::Shader;
 use rendernet::{Error, Result};
@@ -12,8 +12,8 @@ use std::path::PathBuf;
 #[derive(Args, Debug)]
 pub struct WeightsArgs {
     /// Weights: a safetensors file from `rendernet train` (<out>.weights.safetensors, or the
-    /// checkpoint <out> itself, whose Adam state is ignored); default: the embedded Phong
-    /// weights of --preset (tiny or nano).
+    /// checkpoint <out> itself, whose Adam state is ignored); default: the embedded weights of
+    /// --preset for the shader (Phong: tiny or nano; ao: tiny).
     #[arg(long)]
     pub weights: Option<PathBuf>,
     /// Network size the weights belong to: tiny (default), nano (faster, less accurate),
@@ -67,17 +67,14 @@ impl WeightsArgs {
             return Ok((std::fs::read(p).map_err(|e| Error::Io { path: p.display().to_string(), source: e })?, p.display().to_string()));
         }
         let preset = self.preset()?;
-        match (shader, shipped_phong_weights(&preset)) {
-            (Shader::Phong, Some(w)) => Ok((w.to_vec(), format!("embedded {}-phong weights", preset.name))),
-            (Shader::Phong, None) => Err(Error::Invalid(format!(
-                "--preset {}: no weights are shipped for it; pass --weights FILE (make one with `rendernet train --preset {0}`)",
+        shipped_weights(&preset, shader).map(|w| (w.to_vec(), format!("embedded {}-{} weights", preset.name, shader.name()))).ok_or_else(|| {
+            let shipped = shipped_shaders().iter().map(|(s, names)| format!("{} ({})", s.name(), names.join(", "))).collect::<Vec<_>>().join(", ");
+            Error::Invalid(format!(
+                "--shader {} --preset {}: no weights are shipped for it (shipped: {shipped}); pass --weights FILE \
+                 (make one with `rendernet dataset --shader {0} ...` then `rendernet train --preset {1}`)",
+                shader.name(),
                 preset.name
-            ))),
-            (s, _) => Err(Error::Invalid(format!(
-                "--shader {}: no weights are shipped for it yet; pass --weights FILE (make one with \
-                 `rendernet dataset --shader {0} ...` then `rendernet train`)",
-                s.name()
-            ))),
-        }
+            ))
+        })
     }
 }

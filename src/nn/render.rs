@@ -17,6 +17,10 @@ pub const TINY_PHONG_WEIGHTS: &[u8] = include_bytes!("../../weights/tiny-phong.s
 /// and recipe, shorter; weights/README.md).
 pub const NANO_PHONG_WEIGHTS: &[u8] = include_bytes!("../../weights/nano-phong.safetensors");
 
+/// The tiny preset trained for ambient occlusion (`--shader ao`) on the same shape families
+/// (weights/README.md).
+pub const TINY_AO_WEIGHTS: &[u8] = include_bytes!("../../weights/tiny-ao.safetensors");
+
 /// A shipped Phong model and its measured accuracy, for picking one by quality.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShippedModel {
@@ -48,11 +52,26 @@ pub fn shipped_for_psnr(db: f64) -> Result<ShippedModel> {
 
 /// The shipped Phong weights of `preset`, if any.
 pub fn shipped_phong_weights(preset: &Preset) -> Option<&'static [u8]> {
-    match preset.name {
-        "tiny" => Some(TINY_PHONG_WEIGHTS),
-        "nano" => Some(NANO_PHONG_WEIGHTS),
+    shipped_weights(preset, Shader::Phong)
+}
+
+/// The shipped weights of `preset` trained for `shader`, if any.
+pub fn shipped_weights(preset: &Preset, shader: Shader) -> Option<&'static [u8]> {
+    match (preset.name, shader) {
+        ("tiny", Shader::Phong) => Some(TINY_PHONG_WEIGHTS),
+        ("nano", Shader::Phong) => Some(NANO_PHONG_WEIGHTS),
+        ("tiny", Shader::AmbientOcclusion) => Some(TINY_AO_WEIGHTS),
         _ => None,
     }
+}
+
+/// The shaders some preset has shipped weights for, with those presets' names.
+pub fn shipped_shaders() -> Vec<(Shader, Vec<&'static str>)> {
+    Shader::ALL
+        .into_iter()
+        .map(|s| (s, ["nano", "tiny"].into_iter().filter(|&n| Preset::by_name(n).is_ok_and(|p| shipped_weights(&p, s).is_some())).collect::<Vec<_>>()))
+        .filter(|(_, names)| !names.is_empty())
+        .collect()
 }
 
 /// A RenderNet ready to render, for one image size.
