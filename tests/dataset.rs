@@ -40,6 +40,7 @@ fn opts(seed: u64, shader: Shader) -> GenerateOptions {
         radius: rendernet::data::generate::PAPER_RADII,
         supersample: 1,
         ao_rays: 64,
+        colour: false,
         real_dir: PathBuf::from("datasets/real"),
     }
 }
@@ -378,4 +379,37 @@ fn ao_targets_take_their_ray_count() {
     o.ao_rays = 15;
     let err = data::generate(gpu(), &o, &tmp("ao15"), |_, _| {}).unwrap_err().to_string();
     assert!(err.contains("--ao-rays 15"), "{err}");
+}
+
+/// `colour`: shards carry the input grid's RGB (`colours`), the Phong albedo target is RGB,
+/// and what the reader returns is what the generator painted: the input grid's colours equal
+/// the shape's paint at the same resolution, and the albedo image is not grey. Real meshes
+/// (unpainted) are refused by flag name.
+#[test]
+fn coloured_datasets_carry_the_paint() {
+    let d = tmp("colour");
+    let o = GenerateOptions { colour: true, ..opts(21, Shader::Phong) };
+    data::generate(gpu(), &o, &d, |_, _| {}).unwrap();
+    let ds = Dataset::open(&d).unwrap();
+    assert!(ds.manifest.colour);
+    let s = ds.split(Split::Train).get(0).unwrap();
+    let seed = rendernet::data::generate::shape_seed(o.seed, 0);
+    let want = rendernet::voxel::Family::Chair.generate(seed).to_coloured_grid(o.res, seed).unwrap();
+    let (got, want) = (s.grid.colour().expect("a coloured grid"), want.colour().unwrap());
+    let occupied: Vec<usize> = (0..s.grid.len()).filter(|&i| s.grid.occupancy()[i] > 0.5).collect();
+    assert!(!occupied.is_empty());
+    for &i in &occupied {
+        for c in 0..3 {
+            let (g, w) = (got[c * s.grid.len() + i], want[c * s.grid.len() + i]);
+            assert!((g - w).abs() <= 0.5 / 255.0 + 1e-6, "voxel {i} channel {c}: {g} stored, {w} painted");
+        }
+    }
+    let albedo = &s.images["albedo"];
+    assert_eq!(albedo.channels, 3);
+    let px = albedo.size * albedo.size;
+    let coloured = (0..px).filter(|&i| (albedo.data[i] - albedo.data[px + i]).abs() > 0.1 || (albedo.data[i] - albedo.data[2 * px + i]).abs() > 0.1).count();
+    assert!(coloured > 10, "only {coloured} albedo pixels are not grey");
+    let real = GenerateOptions { shapes: Shapes::Real, ..o };
+    let err = data::generate(gpu(), &real, &tmp("colour-real"), |_, _| {}).unwrap_err().to_string();
+    assert!(err.contains("--colour") && err.contains("real"), "{err}");
 }

@@ -361,3 +361,74 @@ fn ec_baselines_see_the_pose_and_learn() {
         assert!(last < 0.8 * first, "deep={}: loss {first} -> {last} after 40 steps", s.deep);
     }
 }
+
+/// Coloured voxels: a colour preset takes 4 input channels and predicts an RGB albedo, and
+/// the colour reaches it: trained on the same cube painted red and painted blue, the
+/// predicted albedo is redder for the red cube and bluer for the blue one. Weights with a
+/// 4-channel first conv are recognised as colour weights.
+#[test]
+fn coloured_voxels_reach_the_albedo_head() {
+    use rendernet::data::Sample;
+    use rendernet::graph::Executor;
+    use rendernet::ops::adam::Adam;
+    use rendernet::train::batch::Batch;
+    use rendernet::voxel::VoxelGrid;
+    let gpu = Gpu::new().unwrap();
+    let toy = Preset { name: "toy", input: 16, cam: 16, c3: [4, 4], res3d: 0, proj: 8, c2: 8, res2d: 0, up: vec![6], ..Preset::tiny() }.with_colour();
+    let (n, side) = (16usize, 16usize);
+    let occ: Vec<f32> = (0..n * n * n).map(|i| [i / (n * n), (i / n) % n, i % n].iter().all(|&x| (3..13).contains(&x)) as u8 as f32).collect();
+    let painted = |rgb: [f32; 3]| VoxelGrid::new([n; 3], occ.clone()).unwrap().with_colour(rgb.iter().flat_map(|&c| vec![c; n * n * n]).collect()).unwrap();
+    let (view, light) = (View { azimuth: 35.0, elevation: 60.0, radius: 1.8 }, Light::default());
+    let reference = reference::RayMarcher::new(&gpu);
+    let sample = |grid: VoxelGrid| {
+        let mut images = std::collections::BTreeMap::new();
+        for (name, shader) in [("phong", Shader::Phong), ("normal", Shader::Normal), ("albedo", Shader::Albedo), ("mask", Shader::Mask)] {
+            let mut img = reference.render(&gpu, &grid, &view, &light, shader, side as u32).unwrap();
+            if shader == Shader::Mask {
+                img.channels = 1;
+                img.data.truncate(side * side);
+            }
+            images.insert(name.to_string(), img);
+        }
+        Sample { grid, view, light, shape_id: 0, images }
+    };
+    let (red, blue) = (sample(painted([0.9, 0.15, 0.1])), sample(painted([0.1, 0.2, 0.9])));
+    let net = RenderNet::build(&toy, Head::Phong(phong_of(&light)), 2, [16, 16], true).unwrap();
+    assert_eq!(net.graph.info(net.grid).shape, [2, 4, 16, 16, 16]);
+    let albedo = net.maps.unwrap()[1];
+    assert_eq!(net.graph.info(albedo).shape, [2, 3, 16, 16]);
+    let names: Vec<String> = net.targets.iter().map(|(n, _)| n.clone()).collect();
+    let mut b = Batch::default();
+    for s in [&red, &blue] {
+        b.push(&toy, s, [0, 0, 16, 16], &names).unwrap();
+    }
+    let mut ex = Executor::new(&gpu, net.graph.clone(), 3).unwrap();
+    ex.keep(albedo);
+    ex.feed(&gpu, net.grid, &b.grid).unwrap();
+    ex.feed(&gpu, net.pose, &b.pose).unwrap();
+    ex.feed(&gpu, net.light.unwrap(), &b.light).unwrap();
+    for (name, v) in &b.targets {
+        ex.feed(&gpu, net.targets.iter().find(|(n, _)| n == name).unwrap().1, v).unwrap();
+    }
+    for _ in 0..150 {
+        ex.train_step(&gpu, net.loss.unwrap(), &Adam::new(1e-2)).unwrap();
+    }
+    ex.forward(&gpu).unwrap();
+    let a = ex.read(&gpu, albedo).unwrap();
+    // Mean of each albedo channel over the cube's pixels (the mask), per sample.
+    let mask = &red.images["mask"].data;
+    let px = side * side;
+    let mean = |k: usize, c: usize| {
+        let on: Vec<usize> = (0..px).filter(|&i| mask[i] > 0.5).collect();
+        on.iter().map(|&i| a[(k * 3 + c) * px + i]).sum::<f32>() / on.len() as f32
+    };
+    let (red_r, red_b, blue_r, blue_b) = (mean(0, 0), mean(0, 2), mean(1, 0), mean(1, 2));
+    eprintln!("albedo: red cube r {red_r:.3} b {red_b:.3}; blue cube r {blue_r:.3} b {blue_b:.3}");
+    assert!(red_r - blue_r > 0.2 && blue_b - red_b > 0.2, "red cube r {red_r} b {red_b}; blue cube r {blue_r} b {blue_b}");
+    let file = std::env::temp_dir().join(format!("rendernet-colour-{}.safetensors", std::process::id()));
+    ex.save_params(&gpu, &file).unwrap();
+    let bytes = std::fs::read(&file).unwrap();
+    let _ = std::fs::remove_file(&file);
+    assert!(rendernet::nn::render::weights_take_colour(&bytes, "toy").unwrap());
+    assert!(!rendernet::nn::render::weights_take_colour(TINY_PHONG_WEIGHTS, "tiny").unwrap());
+}

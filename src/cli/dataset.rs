@@ -49,6 +49,11 @@ pub struct DatasetArgs {
     /// directions). 16 renders about 4x faster than the default 64, with coarser shading.
     #[arg(long, default_value_t = 64)]
     ao_rays: u32,
+    /// Paint the procedural shapes: each part a colour, plain, striped or checkered. The
+    /// input grids then carry RGB (a `colours` tensor) and Phong datasets an RGB albedo map;
+    /// a network trained on it takes coloured voxels (.vox palettes) and renders in colour.
+    #[arg(long)]
+    colour: bool,
     /// Meshes for --shapes real (see datasets/fetch_real.sh).
     #[arg(long, default_value = "datasets/real")]
     real_dir: PathBuf,
@@ -87,6 +92,7 @@ pub fn run(a: DatasetArgs) -> Result<()> {
         supersample: a.supersample,
         ao_rays: a.ao_rays,
         real_dir: a.real_dir,
+        colour: a.colour,
     };
     let bar = indicatif::ProgressBar::new((o.count * o.views) as u64);
     bar.set_style(

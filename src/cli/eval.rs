@@ -44,6 +44,7 @@ pub fn run(a: EvalArgs) -> Result<()> {
     let gpu = Gpu::new()?;
     let ds = Dataset::open(&a.data)?;
     let p = Preset::by_name(&a.preset)?;
+    let p = if ds.manifest.colour { p.with_colour() } else { p };
     let shader = ds.manifest.shader_kind()?;
     if let Some(want) = a.shader.filter(|&s| s != shader) {
         return Err(Error::Invalid(format!(

@@ -9,7 +9,7 @@
 //! camera, white.
 
 use super::{
-    GRIDS, LIGHTS, LightParams, MANIFEST, Manifest, SHAPE_IDS, SHARD_SIZE, Split, SplitInfo, VIEWS,
+    COLOURS, GRIDS, LIGHTS, LightParams, MANIFEST, Manifest, SHAPE_IDS, SHARD_SIZE, Split, SplitInfo, VIEWS,
     image_outputs,
 };
 use crate::error::{Error, Result};
@@ -92,6 +92,11 @@ pub struct GenerateOptions {
     pub ao_rays: u32,
     /// Directory of meshes for [`Shapes::Real`].
     pub real_dir: PathBuf,
+    /// Paint the procedural shapes ([`Shape::to_coloured_grid`]): the input grids carry RGB
+    /// and Phong targets an RGB albedo map.
+    ///
+    /// [`Shape::to_coloured_grid`]: crate::voxel::Shape::to_coloured_grid
+    pub colour: bool,
 }
 
 /// What [`generate`] wrote.
@@ -179,7 +184,11 @@ fn shape_grids(
             ));
         }
     };
-    let shape = family.generate(shape_seed(o.seed, i));
+    let seed = shape_seed(o.seed, i);
+    let shape = family.generate(seed);
+    if o.colour {
+        return Ok((shape.to_coloured_grid(o.res, seed).map_err(verr)?, shape.to_coloured_grid(o.truth_res, seed).map_err(verr)?));
+    }
     Ok((
         shape.to_grid(o.res).map_err(verr)?,
         shape.to_grid(o.truth_res).map_err(verr)?,
@@ -191,6 +200,7 @@ fn shape_grids(
 struct ShardBuf {
     len: usize,
     grids: Vec<u8>,
+    colours: Vec<u8>,
     views: Vec<f32>,
     lights: Vec<f32>,
     shape_ids: Vec<f32>,
@@ -260,6 +270,9 @@ impl Writer<'_> {
                 TensorView::new(Dtype::F32, vec![n], &ids).map_err(err)?,
             ),
         ];
+        if self.o.colour {
+            t.push((COLOURS, TensorView::new(Dtype::U8, vec![n, 3, r, r, r], &b.colours).map_err(err)?));
+        }
         for ((name, _, c), data) in self.outputs.iter().zip(&b.images) {
             t.push((
                 name,
@@ -284,6 +297,7 @@ impl Writer<'_> {
         let (o, gpu) = (self.o, self.gpu);
         let (input, truth) = shape_grids(o, &self.meshes, i)?;
         let grid_u8: Vec<u8> = input.occupancy().iter().map(|&v| to_u8(v)).collect();
+        let colour_u8: Vec<u8> = input.colour().unwrap_or_default().iter().map(|&v| to_u8(v)).collect();
         let g = GpuGrid::upload(gpu, &truth)?;
         let poses = sample_poses(shape_seed(o.seed, i), o.views, o.radius);
         let light_params = Light::default();
@@ -326,6 +340,7 @@ impl Writer<'_> {
                 }
                 self.buf.len += 1;
                 self.buf.grids.extend_from_slice(&grid_u8);
+                self.buf.colours.extend_from_slice(&colour_u8);
                 self.buf.views.extend_from_slice(v);
                 self.buf.lights.extend_from_slice(l);
                 self.buf.shape_ids.push(i as f32);
@@ -364,6 +379,9 @@ fn validate(o: &GenerateOptions) -> Result<()> {
             "res {} and truth_res {} must be in 1..=1024, image {} in 1..=8192",
             o.res, o.truth_res, o.image
         ));
+    }
+    if o.colour && o.shapes == Shapes::Real {
+        return bad("--colour paints procedural shapes; --shapes real meshes carry no paint (use chairs or mixed)".into());
     }
     let (lo, hi) = o.radius;
     if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi) {
@@ -431,7 +449,7 @@ pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path, mut progress: impl F
         meshes,
         o,
         dir,
-        outputs: image_outputs(o.shader),
+        outputs: image_outputs(o.shader, o.colour),
         buf: ShardBuf::default(),
         done: 0,
     };
@@ -461,6 +479,7 @@ pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path, mut progress: impl F
         ao_rays: o.ao_rays,
         test_fraction: o.test_fraction,
         radius: o.radius,
+        colour: o.colour,
     };
     write_atomic(dir, MANIFEST, manifest.to_json().as_bytes())?;
     Ok(Summary {

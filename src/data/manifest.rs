@@ -70,6 +70,9 @@ pub struct Manifest {
     pub test_fraction: f64,
     /// Camera radius range (extra key; the paper's 3..6.3 when absent).
     pub radius: (f64, f64),
+    /// Coloured voxels (extra key; false when absent): shards carry `colours` and Phong
+    /// datasets an RGB albedo map.
+    pub colour: bool,
 }
 
 impl Manifest {
@@ -98,6 +101,7 @@ impl Manifest {
             "ao_rays": self.ao_rays,
             "test_fraction": self.test_fraction,
             "radius": [self.radius.0, self.radius.1],
+            "colour": self.colour,
         });
         serde_json::to_string_pretty(&v).expect("a JSON value always serialises") + "\n"
     }
@@ -211,6 +215,10 @@ impl Manifest {
                     [Some(lo), Some(hi)] if lo > 0.0 && lo <= hi => (lo, hi),
                     _ => return Err(bad("radius", "expected [min, max] with 0 < min <= max")),
                 },
+            },
+            colour: match v.get("colour") {
+                None => false,
+                Some(c) => c.as_bool().ok_or_else(|| bad("colour", "expected true or false"))?,
             },
         };
         m.shader_kind()

@@ -9,9 +9,11 @@
 //! - `lights` F32 `[K, 5]`: light azimuth (deg), elevation (deg), r, g, b ([`Light`]; the
 //!   material constants are the manifest's `light`);
 //! - `shape_ids` F32 `[K]`: the shape's index `i` (train and test never share one);
+//! - `colours` U8 `[K, 3, R, R, R]`, only in coloured datasets (manifest `colour: true`): the
+//!   input grid's RGB times 255 (the colour of empty voxels is 0 and means nothing);
 //! - images U8 `[K, C, S, S]` (value times 255, rounded): for shader `phong` the tensors
-//!   `phong` (3), `normal` (3), `albedo` (1, grey) and `mask` (1); for any other shader one
-//!   tensor `image` with that shader's channels.
+//!   `phong` (3), `normal` (3), `albedo` (1, grey; 3 in coloured datasets) and `mask` (1);
+//!   for any other shader one tensor `image` with that shader's channels.
 //!
 //! Samples are stored shape-major (all views of shape 0, then shape 1, ...), so sample `j` of
 //! a split lives in shard `j / SHARD_SIZE` at row `j % SHARD_SIZE`.
@@ -39,6 +41,8 @@ pub const SHARD_SIZE: usize = 256;
 pub const MANIFEST: &str = "manifest.json";
 /// Input grids tensor.
 pub const GRIDS: &str = "grids";
+/// Input grid colours tensor (coloured datasets only).
+pub const COLOURS: &str = "colours";
 /// Camera poses tensor.
 pub const VIEWS: &str = "views";
 /// Lights tensor.
@@ -73,14 +77,14 @@ impl Split {
 }
 
 /// The image tensors a dataset of `shader` stores: `(tensor name, shader rendered, channels)`.
-/// Phong datasets also carry the normal map, grey albedo and mask, which a shading network
-/// or its losses may want; albedo is stored grey (channel 0) because the grids are uncoloured.
-pub fn image_outputs(shader: Shader) -> Vec<(&'static str, Shader, usize)> {
+/// Phong datasets also carry the normal map, albedo and mask, which a shading network or its
+/// losses may want; albedo is stored grey (channel 0) unless the grids are coloured.
+pub fn image_outputs(shader: Shader, colour: bool) -> Vec<(&'static str, Shader, usize)> {
     match shader {
         Shader::Phong => vec![
             ("phong", Shader::Phong, 3),
             ("normal", Shader::Normal, 3),
-            ("albedo", Shader::Albedo, 1),
+            ("albedo", Shader::Albedo, if colour { 3 } else { 1 }),
             ("mask", Shader::Mask, 1),
         ],
         s => vec![("image", s, s.channels())],
@@ -159,7 +163,7 @@ impl Dataset {
             source: e,
         })?;
         let manifest = Manifest::parse(&text, &mpath.display().to_string())?;
-        let outputs = image_outputs(manifest.shader_kind()?);
+        let outputs = image_outputs(manifest.shader_kind()?, manifest.colour);
         let ds = Dataset {
             dir,
             manifest,
@@ -202,6 +206,9 @@ impl Dataset {
             (LIGHTS.to_string(), Dtype::F32, vec![n, 5]),
             (SHAPE_IDS.to_string(), Dtype::F32, vec![n]),
         ];
+        if m.colour {
+            v.push((COLOURS.to_string(), Dtype::U8, vec![n, 3, r, r, r]));
+        }
         v.extend(
             self.outputs
                 .iter()
@@ -363,8 +370,11 @@ impl SplitView<'_> {
         let m = &ds.manifest;
         let unpack = |b: &[u8]| b.iter().map(|&x| x as f32 / 255.0).collect::<Vec<f32>>();
         let r3 = m.res * m.res * m.res;
-        let grid = VoxelGrid::new([m.res; 3], unpack(&shard.read(GRIDS, j * r3, r3)?))
+        let mut grid = VoxelGrid::new([m.res; 3], unpack(&shard.read(GRIDS, j * r3, r3)?))
             .map_err(|e| Error::Invalid(e.to_string()))?;
+        if m.colour {
+            grid = grid.with_colour(unpack(&shard.read(COLOURS, j * 3 * r3, 3 * r3)?)).map_err(|e| Error::Invalid(e.to_string()))?;
+        }
         let v = &shard.views[j * 3..j * 3 + 3];
         let l = &shard.lights[j * 5..j * 5 + 5];
         let view = View {

@@ -301,7 +301,7 @@ impl Inverter {
     fn grid_values(&self, grid: &VoxelGrid) -> Result<Vec<f32>> {
         let p = &self.preset;
         let g = if grid.dims() == [p.input; 3] { grid.clone() } else { grid.resample_to(p.input)? };
-        Ok(camera::input_values(&g))
+        Ok(camera::input_values_with(&g, p.in_channels()))
     }
 
     /// Adam on every kept start at once (rendering `win` only, against the target's pixels

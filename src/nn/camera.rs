@@ -17,14 +17,39 @@ use crate::voxel::VoxelGrid;
 
 /// The grid as the network's input `[R, R, R]` values, axes permuted as the module says.
 pub fn input_values(grid: &VoxelGrid) -> Vec<f32> {
-    let [d, h, w] = grid.dims();
+    permuted(grid.dims(), grid.occupancy())
+}
+
+/// The input of a network with `channels` input channels ([`Preset::in_channels`]): the
+/// occupancy, then for 4 channels RGB times occupancy, so that empty space is 0 in every
+/// channel and resampling blends colour as it blends occupancy. A grid without colour
+/// counts as white, the albedo the reference renderer gives it.
+///
+/// [`Preset::in_channels`]: crate::nn::rendernet::Preset::in_channels
+pub fn input_values_with(grid: &VoxelGrid, channels: usize) -> Vec<f32> {
     let occ = grid.occupancy();
-    // Input axes (a, b, c) = (w, H-1-h, d): sizes (W, H, D).
+    let mut out = permuted(grid.dims(), occ);
+    if channels == 4 {
+        let n = occ.len();
+        for c in 0..3 {
+            let rgb: Vec<f32> = match grid.colour() {
+                Some(col) => col[c * n..(c + 1) * n].iter().zip(occ).map(|(a, o)| a * o).collect(),
+                None => occ.to_vec(),
+            };
+            out.extend(permuted(grid.dims(), &rgb));
+        }
+    }
+    out
+}
+
+/// One channel `[D, H, W]` in the network's axis order: (a, b, c) = (w, H-1-h, d), sizes
+/// (W, H, D).
+fn permuted([d, h, w]: [usize; 3], v: &[f32]) -> Vec<f32> {
     let mut out = vec![0.0; d * h * w];
     for a in 0..w {
         for b in 0..h {
             for c in 0..d {
-                out[(a * h + b) * d + c] = occ[(c * h + (h - 1 - b)) * w + a];
+                out[(a * h + b) * d + c] = v[(c * h + (h - 1 - b)) * w + a];
             }
         }
     }

@@ -74,6 +74,14 @@ pub fn shipped_shaders() -> Vec<(Shader, Vec<&'static str>)> {
         .collect()
 }
 
+/// Whether RenderNet weights were trained on coloured voxels: their first 3D conv
+/// (`enc3d.conv1.weight`, OIDHW) takes 4 input channels. False for weights without it (the
+/// EC baselines); malformed bytes are an error naming `name`.
+pub fn weights_take_colour(weights: &[u8], name: &str) -> Result<bool> {
+    let st = safetensors::SafeTensors::deserialize(weights).map_err(|e| Error::Invalid(format!("{name}: not a safetensors file: {e}")))?;
+    Ok(st.tensor("enc3d.conv1.weight").is_ok_and(|t| t.shape().get(1) == Some(&4)))
+}
+
 /// A RenderNet ready to render, for one image size.
 pub struct Renderer {
     preset: Preset,
@@ -106,7 +114,10 @@ impl Renderer {
     /// [`Renderer::new`] for weights trained on another shader's images (a dataset made with
     /// `--shader`): Phong has the normal/albedo/mask heads and takes the light; every other
     /// shader is one image head of [`Shader::channels`] channels that ignores the light.
+    /// Weights trained on coloured voxels (4 input channels, see [`weights_take_colour`])
+    /// switch the preset to [`Preset::with_colour`].
     pub fn for_shader(gpu: &Gpu, preset: Preset, shader: Shader, weights: &[u8], name: &str, size: usize) -> Result<Renderer> {
+        let preset = if weights_take_colour(weights, name)? && preset.fully_convolutional() { preset.with_colour() } else { preset };
         let f = preset.image_for(preset.cam) / preset.cam;
         if size == 0 || size % (4 * f) != 0 {
             return Err(Error::Invalid(format!("image size {size} must be a positive multiple of {}", 4 * f)));
@@ -175,7 +186,7 @@ impl Renderer {
         };
         let i = self.net_for(gpu, [win[2], win[3]])?;
         let (_, net, ex) = &mut self.nets[i];
-        ex.feed(gpu, net.grid, &camera::input_values(&g))?;
+        ex.feed(gpu, net.grid, &camera::input_values_with(&g, self.preset.in_channels()))?;
         ex.feed(gpu, net.pose, &p.pose_values(view, cam_hw, Some(win)))?;
         if let Some(l) = net.light {
             ex.feed(gpu, l, &camera::light_values(light))?;

@@ -37,6 +37,9 @@ pub struct Preset {
     /// RenderNet, or one of the paper's encoder-decoder baselines (which ignore the fields
     /// above but `input` and `cam`).
     pub arch: Arch,
+    /// Coloured voxels: the input grid has 4 channels (occupancy, then RGB times occupancy)
+    /// and the Phong albedo head predicts RGB ([`Preset::with_colour`]).
+    pub colour: bool,
 }
 
 /// The network family of a [`Preset`].
@@ -54,25 +57,25 @@ impl Preset {
     /// The small preset that trains on a 2-core CPU through lavapipe: 32^3 input, 64^3
     /// camera grid, 128x128 image.
     pub fn tiny() -> Preset {
-        Preset { name: "tiny", input: 32, cam: 64, c3: [8, 16], res3d: 0, proj: 64, c2: 32, res2d: 2, up: vec![32, 16], arch: Arch::RenderNet }
+        Preset { name: "tiny", input: 32, cam: 64, c3: [8, 16], res3d: 0, proj: 64, c2: 32, res2d: 2, up: vec![32, 16], arch: Arch::RenderNet, colour: false }
     }
 
     /// The rung below [`Preset::tiny`] on the speed/accuracy ladder: the same grids and image,
     /// half the channels everywhere and one 2D residual block (about a quarter of the work).
     pub fn nano() -> Preset {
-        Preset { name: "nano", input: 32, cam: 64, c3: [4, 8], res3d: 0, proj: 32, c2: 16, res2d: 1, up: vec![16, 8], arch: Arch::RenderNet }
+        Preset { name: "nano", input: 32, cam: 64, c3: [4, 8], res3d: 0, proj: 32, c2: 16, res2d: 1, up: vec![16, 8], arch: Arch::RenderNet, colour: false }
     }
 
     /// The rung above [`Preset::tiny`]: the same grids and image, a 2D trunk twice as wide
     /// (64 channels, projection 256->128) with 3 residual blocks, for sharper shading.
     pub fn small() -> Preset {
-        Preset { name: "small", input: 32, cam: 64, c3: [8, 16], res3d: 0, proj: 128, c2: 64, res2d: 3, up: vec![32, 16], arch: Arch::RenderNet }
+        Preset { name: "small", input: 32, cam: 64, c3: [8, 16], res3d: 0, proj: 128, c2: 64, res2d: 3, up: vec![32, 16], arch: Arch::RenderNet, colour: false }
     }
 
     /// The rung between [`Preset::small`] and [`Preset::paper`]: wider 3D convs (16/32) with
     /// one 3D residual block, a 128-channel 2D trunk with 4 residual blocks.
     pub fn base() -> Preset {
-        Preset { name: "base", input: 32, cam: 64, c3: [16, 32], res3d: 1, proj: 128, c2: 128, res2d: 4, up: vec![64, 32], arch: Arch::RenderNet }
+        Preset { name: "base", input: 32, cam: 64, c3: [16, 32], res3d: 1, proj: 128, c2: 128, res2d: 4, up: vec![64, 32], arch: Arch::RenderNet, colour: false }
     }
 
     /// The paper's appendix sizes (64^3 input into a 128^3 grid, 512^2 image); for real GPUs.
@@ -88,17 +91,34 @@ impl Preset {
             res2d: 10,
             up: vec![128, 64, 32],
             arch: Arch::RenderNet,
+            colour: false,
         }
     }
 
     /// The paper's EC baseline at the size trained here (32^3 grid, 128 px; [`EcSizes::ec`]).
     pub fn ec() -> Preset {
-        Preset { name: "ec", input: 32, cam: 64, c3: [0, 0], res3d: 0, proj: 0, c2: 0, res2d: 0, up: Vec::new(), arch: Arch::Ec(EcSizes::ec()) }
+        Preset { name: "ec", input: 32, cam: 64, c3: [0, 0], res3d: 0, proj: 0, c2: 0, res2d: 0, up: Vec::new(), arch: Arch::Ec(EcSizes::ec()), colour: false }
     }
 
     /// The paper's EC-deep baseline ([`EcSizes::ec_deep`]).
     pub fn ec_deep() -> Preset {
         Preset { name: "ec-deep", arch: Arch::Ec(EcSizes::ec_deep()), ..Preset::ec() }
+    }
+
+    /// The same sizes for coloured voxels (RenderNet only): RGB input channels and an RGB
+    /// albedo head. The weights differ from the grey preset's in those two layers' shapes.
+    pub fn with_colour(self) -> Preset {
+        Preset { colour: true, ..self }
+    }
+
+    /// Channels of the input grid: 4 with colour (occupancy, RGB times occupancy), else 1.
+    pub fn in_channels(&self) -> usize {
+        if self.colour { 4 } else { 1 }
+    }
+
+    /// Channels of the Phong head's albedo map: 3 with colour, else 1 (grey).
+    pub fn albedo_channels(&self) -> usize {
+        if self.colour { 3 } else { 1 }
     }
 
     /// Whether the network renders camera-grid windows (RenderNet) or only whole frames
@@ -163,7 +183,8 @@ pub fn phong_of(light: &Light) -> Phong {
 pub struct RenderNet {
     /// The graph (hand it to an `Executor`).
     pub graph: Graph,
-    /// Input grid `[N, 1, R, R, R]` (axes as `camera::input_values`).
+    /// Input grid `[N, C, R, R, R]` (C: [`Preset::in_channels`]; axes as
+    /// `camera::input_values`).
     pub grid: Value,
     /// Pose `[N, 6]` (`camera::pose_for_view`).
     pub pose: Value,
@@ -256,12 +277,12 @@ impl RenderNet {
     pub fn build(p: &Preset, head: Head, n: usize, cam_hw: [usize; 2], with_loss: bool) -> Result<RenderNet> {
         let mut g = Graph::new();
         let r = p.input;
-        let grid = g.input("grid", &[n, 1, r, r, r])?;
+        let grid = g.input("grid", &[n, p.in_channels(), r, r, r])?;
         Self::build_on(g, grid, p, head, cam_hw, with_loss)
     }
 
     /// [`RenderNet::build`] on a graph that already computes the input grid `grid`
-    /// (`[N, 1, R, R, R]`, R the preset's input side), e.g. a shape decoder's output, so
+    /// (`[N, C, R, R, R]`, R the preset's input side, C its [`Preset::in_channels`]), e.g. a shape decoder's output, so
     /// gradients reach what made the grid.
     pub fn build_on(mut g: Graph, grid: Value, p: &Preset, head: Head, cam_hw: [usize; 2], with_loss: bool) -> Result<RenderNet> {
         if cam_hw.iter().any(|&s| s % 4 != 0 || s == 0) {
@@ -269,10 +290,14 @@ impl RenderNet {
         }
         let r = p.input;
         let n = g.info(grid).shape[0];
-        if g.info(grid).shape != [n, 1, r, r, r] {
-            return Err(Error::Invalid(format!("grid {:?}: preset '{}' needs [N, 1, {r}, {r}, {r}]", g.info(grid).shape, p.name)));
+        let c = p.in_channels();
+        if g.info(grid).shape != [n, c, r, r, r] {
+            return Err(Error::Invalid(format!("grid {:?}: preset '{}' needs [N, {c}, {r}, {r}, {r}]", g.info(grid).shape, p.name)));
         }
         if let Arch::Ec(s) = &p.arch {
+            if p.colour {
+                return Err(Error::Invalid(format!("preset '{}': the EC baselines take grey grids only (no colour)", p.name)));
+            }
             if cam_hw != [p.cam, p.cam] {
                 let side = s.image();
                 return Err(Error::Invalid(format!("preset '{}' renders whole {side}x{side} frames only (camera window {cam_hw:?} asked)", p.name)));
@@ -309,7 +334,7 @@ impl RenderNet {
         let (image, maps, light) = match head {
             Head::Phong(ph) => {
                 let normal = b.head("head.normal", x, 3)?;
-                let albedo = b.head("head.albedo", x, 1)?;
+                let albedo = b.head("head.albedo", x, p.albedo_channels())?;
                 let mask = b.head("head.mask", x, 1)?;
                 let light = b.g.input("light", &[n, 6])?;
                 let img = b.g.apply("phong", Op::Phong(ph), &[normal, albedo, mask, light])?;
@@ -329,7 +354,7 @@ impl RenderNet {
                 (Head::Phong(_), Some([normal, albedo, mask])) => {
                     let ti = t(&mut g, "phong", 3)?;
                     let tn = t(&mut g, "normal", 3)?;
-                    let ta = t(&mut g, "albedo", 1)?;
+                    let ta = t(&mut g, "albedo", p.albedo_channels())?;
                     let tm = t(&mut g, "mask", 1)?;
                     let li = g.apply("loss.phong", Op::Loss(Loss::Mse), &[image, ti])?;
                     let ln = g.apply("loss.normal", Op::Loss(Loss::Mse), &[normal, tn])?;

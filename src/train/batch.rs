@@ -9,7 +9,7 @@ use crate::reference::Image;
 /// Inputs and targets of one batch, flattened in the graph's layouts.
 #[derive(Default)]
 pub struct Batch {
-    /// `[N, 1, R, R, R]`.
+    /// `[N, C, R, R, R]` (C: [`Preset::in_channels`]).
     pub grid: Vec<f32>,
     /// `[N, 6]`.
     pub pose: Vec<f32>,
@@ -26,7 +26,7 @@ pub fn grid_values(p: &Preset, s: &Sample) -> Result<Vec<f32>> {
     } else {
         s.grid.resample_to(p.input).map_err(|e| Error::Invalid(e.to_string()))?
     };
-    Ok(camera::input_values(&g))
+    Ok(camera::input_values_with(&g, p.in_channels()))
 }
 
 /// Rows `[y0, y0+h)` and columns `[x0, x0+w)` of every channel of `img`.

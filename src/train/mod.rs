@@ -154,6 +154,17 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
         return Err(Error::Invalid(format!("{}: the train split is empty", cfg.data.display())));
     }
     let head = head_for(&ds)?;
+    // A coloured dataset trains the preset's colour variant (RGB input and albedo).
+    let coloured;
+    let cfg = if ds.manifest.colour {
+        if !cfg.preset.fully_convolutional() {
+            return Err(Error::Invalid(format!("{}: coloured voxels need a RenderNet preset; '{}' takes grey grids only", cfg.data.display(), cfg.preset.name)));
+        }
+        coloured = TrainConfig { preset: cfg.preset.clone().with_colour(), ..cfg.clone() };
+        &coloured
+    } else {
+        cfg
+    };
     let p = &cfg.preset;
     let resume = cfg.resume.as_deref();
     let mut start = 0;

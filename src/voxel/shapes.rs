@@ -8,8 +8,10 @@
 //! the same frame, so a mesh renderer and the voxel grid line up without further transforms.
 
 mod families;
+mod paint;
 
 pub use families::{chair, primitive, sofa, table};
+pub use paint::{Paint, Pattern};
 
 use super::{Mesh, VoxelError, VoxelGrid, check_dims};
 use glam::{Mat3, Vec3};
