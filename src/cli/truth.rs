@@ -26,6 +26,9 @@ pub struct SceneArgs {
     /// Seed of the procedural shape.
     #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     seed: u64,
+    /// Paint the procedural --shape as `dataset --colour` does (a colour and pattern per part).
+    #[arg(long, requires = "shape")]
+    colour: bool,
     /// Camera azimuth in degrees about the up axis (0 looks at the object's front); any finite value.
     #[arg(long, default_value_t = View::default().azimuth, allow_hyphen_values = true)]
     azimuth: f64,
@@ -150,8 +153,10 @@ fn voxel_err(e: voxel::VoxelError) -> Error {
 pub fn load(a: &SceneArgs) -> Result<(VoxelGrid, String)> {
     let Some(path) = &a.voxels else {
         if let Some(family) = a.shape {
-            let grid = family.generate(a.seed).to_grid(a.resolution).map_err(voxel_err)?;
-            let what = format!("procedural {family:?} seed {} at {}^3", a.seed, a.resolution).to_lowercase();
+            let shape = family.generate(a.seed);
+            let grid = if a.colour { shape.to_coloured_grid(a.resolution, a.seed) } else { shape.to_grid(a.resolution) }.map_err(voxel_err)?;
+            let paint = if a.colour { "painted " } else { "" };
+            let what = format!("{paint}procedural {family:?} seed {} at {}^3", a.seed, a.resolution).to_lowercase();
             return Ok((grid, what));
         }
         return Ok((voxel::bunny(), "the embedded Stanford bunny at 64^3".into()));
