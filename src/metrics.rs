@@ -85,6 +85,31 @@ impl Scores {
         let black = Image { channels: truth.channels, size: truth.size, data: vec![0.0; truth.data.len()] };
         Scores::of(&black, truth)
     }
+
+    /// [`Scores::of`] for images whose background is `background` (0 for most shaders, 1 for
+    /// contour lines on white): both images are scored by their distance from the background
+    /// (`|v - background|`), so the object box and the masks find the drawing, not the whole
+    /// white frame. PSNR is unchanged by the mapping.
+    pub fn on_background(pred: &Image, truth: &Image, background: f32) -> Self {
+        Scores::of(&from_background(pred, background), &from_background(truth, background))
+    }
+
+    /// The floor for [`Scores::on_background`]: an image of the background alone (all-black,
+    /// or all-white for contours).
+    pub fn background_floor(truth: &Image, background: f32) -> Self {
+        Scores::black_floor(&from_background(truth, background))
+    }
+}
+
+/// `|v - background|` per value (clamped to [0, 1] first): the identity on black backgrounds,
+/// the negative on white ones.
+pub fn from_background(img: &Image, background: f32) -> Image {
+    Image { data: img.data.iter().map(|v| (v.clamp(0.0, 1.0) - background).abs()).collect(), ..img.clone() }
+}
+
+/// "all-black" or "all-white": how reports name the [`Scores::background_floor`] image.
+pub fn floor_name(background: f32) -> &'static str {
+    if background >= 0.5 { "all-white" } else { "all-black" }
 }
 
 /// Full-frame PSNR in dB, peak 1, capped at [`PSNR_CAP`].

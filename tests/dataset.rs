@@ -217,6 +217,13 @@ fn other_shaders_store_one_image_tensor() {
     assert_eq!(s.images.keys().collect::<Vec<_>>(), ["image"]);
     assert_eq!(s.images["image"].shape(), [1, 32, 32]);
     assert_eq!(ds.split(Split::Test).len(), 3);
+    // The network of a shader other than Phong takes no light: every view is lit by the
+    // default light (toon targets depend on it).
+    let d = Light::default();
+    for i in 0..ds.split(Split::Train).len() {
+        let l = ds.split(Split::Train).get(i).unwrap().light;
+        assert_eq!((l.azimuth, l.elevation), (d.azimuth as f32 as f64, d.elevation as f32 as f64), "sample {i}");
+    }
 }
 
 /// A copy of the phong dataset to damage.

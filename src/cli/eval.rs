@@ -106,7 +106,8 @@ fn to_json(r: &EvalReport) -> Value {
 
 /// One block, a row per score, then full-frame and object PSNR per shape.
 fn print_text(r: &EvalReport) {
-    println!("held-out scores, {} samples, {} shapes (mean ± 95% interval; an all-black image beside):", r.count, r.per_shape.len());
+    let floor = rendernet::metrics::floor_name(r.background);
+    println!("held-out scores, {} samples, {} shapes (mean ± 95% interval; an {floor} image beside):", r.count, r.per_shape.len());
     let full = Interval { mean: r.mean, ci95: r.ci95 };
     let rows = [
         ("full-frame PSNR", full, r.black, 2, " dB"),
@@ -116,7 +117,7 @@ fn print_text(r: &EvalReport) {
     ];
     for (name, s, black, d, unit) in rows {
         let score = format!("{:.d$} ± {:.d$}{unit}", s.mean, s.ci95);
-        println!("  {name:<16} {score:<20} all-black {black:.d$}{unit}");
+        println!("  {name:<16} {score:<20} {floor} {black:.d$}{unit}");
     }
     println!("per shape, full-frame / object PSNR:");
     for (k, v) in &r.per_shape {

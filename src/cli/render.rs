@@ -59,7 +59,8 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if a.compare {
         let opts = Options { supersample: 2, ..Options::default() };
         let truth = reference::RayMarcher::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, a.shader, a.size as u32)?;
-        println!("against the reference renderer: {}", compare_line(&Scores::of(&img, &truth), &Scores::black_floor(&truth)));
+        let bg = a.shader.background();
+        println!("against the reference renderer: {}", compare_line(&Scores::on_background(&img, &truth, bg), &Scores::background_floor(&truth, bg), rendernet::metrics::floor_name(bg)));
         save_pair(&img, &truth, &a.out)?;
     } else {
         img.save_png(&a.out)?;
@@ -81,10 +82,11 @@ fn save_pair(net: &Image, truth: &Image, path: &std::path::Path) -> Result<()> {
     reference::write_png(&image::DynamicImage::ImageRgb8(Image::side_by_side(&[net, truth])?), path)
 }
 
-/// The four scores, each beside the all-black image's (which full-frame PSNR flatters most).
-fn compare_line(s: &Scores, black: &Scores) -> String {
+/// The four scores, each beside the background-only image's (all-black, or all-white for
+/// contours; full-frame PSNR flatters it most).
+fn compare_line(s: &Scores, black: &Scores, floor: &str) -> String {
     format!(
-        "full-frame PSNR {:.2} dB (all-black {:.2}), object PSNR {:.2} dB (all-black {:.2}), SSIM {:.3} (all-black {:.3}), mask IoU {:.3} (all-black {:.3})",
+        "full-frame PSNR {:.2} dB ({floor} {:.2}), object PSNR {:.2} dB ({floor} {:.2}), SSIM {:.3} ({floor} {:.3}), mask IoU {:.3} ({floor} {:.3})",
         s.psnr, black.psnr, s.object_psnr, black.object_psnr, s.ssim, black.ssim, s.iou, black.iou
     )
 }

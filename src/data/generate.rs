@@ -6,7 +6,8 @@
 //! the options (not on batching or timing). Sampling ranges are the paper's (section 4):
 //! camera azimuth uniform in [0, 360), elevation (polar) uniform in [10, 170), radius uniform
 //! in [3, 6.3); light azimuth uniform in [0, 360) and elevation in [20, 160) relative to the
-//! camera, white.
+//! camera, white, for Phong datasets; the networks of other shaders take no light, so their
+//! targets are lit by the default light (toon depends on it).
 
 use super::{
     COLOURS, GRIDS, LIGHTS, LightParams, MANIFEST, Manifest, SHAPE_IDS, SHARD_SIZE, Split, SplitInfo, VIEWS,
@@ -299,7 +300,13 @@ impl Writer<'_> {
         let grid_u8: Vec<u8> = input.occupancy().iter().map(|&v| to_u8(v)).collect();
         let colour_u8: Vec<u8> = input.colour().unwrap_or_default().iter().map(|&v| to_u8(v)).collect();
         let g = GpuGrid::upload(gpu, &truth)?;
-        let poses = sample_poses(shape_seed(o.seed, i), o.views, o.radius);
+        let mut poses = sample_poses(shape_seed(o.seed, i), o.views, o.radius);
+        // Only the Phong network takes the light: every other shader's network renders one
+        // fixed light (the default, relative to the camera), so toon targets are lit by it.
+        if o.shader != Shader::Phong {
+            let d = Light::default();
+            poses.iter_mut().for_each(|(_, l)| *l = [d.azimuth as f32, d.elevation as f32, 1.0, 1.0, 1.0]);
+        }
         let light_params = Light::default();
         for chunk in poses.chunks(VIEWS_PER_SUBMIT) {
             let outs: Vec<Vec<Tensor>> = chunk

@@ -61,6 +61,10 @@ pub struct EvalReport {
     pub black_iou: f32,
     /// Mean object PSNR per shape id.
     pub per_shape_object_psnr: BTreeMap<u32, f32>,
+    /// The shader's background (0, or 1 for contours): the "black" floors above are then an
+    /// all-white image, and every score is taken on the distance from the background
+    /// ([`crate::metrics::Scores::on_background`]).
+    pub background: f32,
 }
 
 /// Renders up to `limit` held-out samples (0 = all) with the weights at `weights` and
@@ -75,6 +79,7 @@ pub fn evaluate(gpu: &Gpu, p: &Preset, head: Head, weights: &Path, ds: &Dataset,
 pub fn evaluate_bytes(gpu: &Gpu, p: &Preset, head: Head, weights: &[u8], name: &str, ds: &Dataset, limit: usize) -> Result<EvalReport> {
     let test = ds.split(Split::Test);
     let n = test.spread(limit).count();
+    let background = ds.manifest.shader_kind()?.background();
     let net = RenderNet::build(p, head, 1, [p.cam, p.cam], false)?;
     let mut ex = Executor::new(gpu, net.graph.clone(), 0)?;
     ex.load_params_bytes(gpu, weights, name)?;
@@ -103,9 +108,9 @@ pub fn evaluate_bytes(gpu: &Gpu, p: &Preset, head: Head, weights: &[u8], name: &
         // Both sides clamped to [0, 1], as images are stored (the metrics clamp too).
         let image = |data: Vec<f32>| Image { channels: t.len() / (side * side), size: side, data };
         let truth = image(t.clone());
-        let scores = Scores::of(&image(y.iter().map(|v| v.clamp(0.0, 1.0)).collect()), &truth);
+        let scores = Scores::on_background(&image(y.iter().map(|v| v.clamp(0.0, 1.0)).collect()), &truth, background);
         net_scores.push(scores);
-        black_scores.push(Scores::black_floor(&truth));
+        black_scores.push(Scores::background_floor(&truth, background));
         shapes.entry(s.shape_id).or_default().push(scores);
     }
     let stat = |v: &[Scores], f: fn(&Scores) -> f64| Interval::of(&v.iter().map(f).collect::<Vec<_>>());
@@ -123,6 +128,7 @@ pub fn evaluate_bytes(gpu: &Gpu, p: &Preset, head: Head, weights: &[u8], name: &
         black_object_psnr: stat(&black_scores, |s| s.object_psnr).mean,
         black_ssim: stat(&black_scores, |s| s.ssim).mean,
         black_iou: stat(&black_scores, |s| s.iou).mean,
+        background,
         per_shape_object_psnr: per_shape(|s| s.object_psnr),
     })
 }
