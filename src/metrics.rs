@@ -390,4 +390,23 @@ mod tests {
         assert!(psnr(&p, &t) < PSNR_CAP);
         assert_eq!(mask_iou(&p, &t), 1.0);
     }
+
+    /// Contours are black lines on white: scored against a white background the object box
+    /// is the lines' (not the whole frame), the floor is an all-white image, and PSNR is the
+    /// same as without the mapping.
+    #[test]
+    fn white_backgrounds_score_the_drawing_not_the_frame() {
+        let truth = image(1, 64, |_, y, x| if y == 30 && (10..20).contains(&x) { 0.0 } else { 1.0 });
+        let pred = image(1, 64, |_, y, x| if y == 31 && (10..20).contains(&x) { 0.2 } else { 1.0 });
+        let s = Scores::on_background(&pred, &truth, 1.0);
+        let inv = (from_background(&pred, 1.0), from_background(&truth, 1.0));
+        assert_eq!(object_box(&inv.0, &inv.1), Some(PixelBox { x0: 6, y0: 26, x1: 23, y1: 35 }));
+        assert!((s.psnr - psnr(&pred, &truth)).abs() < 1e-4, "values are mapped in f32");
+        assert!(s.object_psnr < s.psnr - 10.0, "the box holds the lines: {s:?}");
+        let floor = Scores::background_floor(&truth, 1.0);
+        let white = image(1, 64, |_, _, _| 1.0);
+        assert!((floor.psnr - psnr(&white, &truth)).abs() < 1e-4 && floor.iou == 0.0);
+        assert_eq!((floor_name(1.0), floor_name(0.0)), ("all-white", "all-black"));
+        assert_eq!(Scores::on_background(&pred, &truth, 0.0), Scores::of(&pred, &truth));
+    }
 }
