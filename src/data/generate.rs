@@ -174,7 +174,8 @@ fn shape_grids(
         Shapes::Real => {
             // The input stays binary like the procedural inputs (`Shape::to_grid`); the truth
             // grid is anti-aliased so the targets show the mesh, not voxel stair-steps.
-            let mesh = Mesh::load(&meshes[i]).map_err(verr)?;
+            let mut mesh = Mesh::load(&meshes[i]).map_err(verr)?;
+            mesh.colours.clear(); // grey datasets stay grey (--colour refuses real meshes)
             let input = VoxelizeOptions {
                 resolution: o.res,
                 ..Default::default()

@@ -16,6 +16,10 @@ pub struct Mesh {
     /// Triangles as indices into `positions` (counter-clockwise seen from outside for
     /// constructed meshes; loaded meshes keep the file's order).
     pub triangles: Vec<[u32; 3]>,
+    /// Per-vertex RGB in `[0, 1]` (OBJ `v x y z r g b`, PLY `red`/`green`/`blue`), one per
+    /// position, or empty when the file has none; [`crate::voxel::voxelize`] carries it into
+    /// the grid's colour.
+    pub colours: Vec<[f32; 3]>,
 }
 
 impl Mesh {
@@ -56,8 +60,17 @@ impl Mesh {
             let lineno = Some(i + 1);
             match tok.next() {
                 Some("v") => {
-                    let p = parse_xyz(tok, name, lineno)?;
+                    let p = parse_xyz(&mut tok, name, lineno)?;
                     mesh.push_vertex(p, name, lineno)?;
+                    // The common `v x y z r g b` extension (the last three numbers; a lone
+                    // fourth is w).
+                    let rgb: Vec<&str> = tok.collect();
+                    if rgb.len() >= 3 {
+                        let c = parse_xyz(rgb[rgb.len() - 3..].iter().copied(), name, lineno)?;
+                        mesh.set_last_colour(Some(c), name, lineno)?;
+                    } else {
+                        mesh.set_last_colour(None, name, lineno)?;
+                    }
                 }
                 Some("f") => {
                     poly.clear();
@@ -202,6 +215,22 @@ impl Mesh {
         Ok(())
     }
 
+    /// Gives the last pushed vertex its colour (`None`: white once any vertex has one), keeping
+    /// `colours` empty until the first coloured vertex and then one per position.
+    pub(crate) fn set_last_colour(&mut self, rgb: Option<[f32; 3]>, name: &str, line: Option<usize>) -> Result<(), VoxelError> {
+        if let Some(c) = rgb {
+            if !c.iter().all(|v| (0.0..=1.0).contains(v)) {
+                return Err(VoxelError::malformed(name, line, format!("vertex colour {c:?} is outside [0, 1]")));
+            }
+        }
+        if rgb.is_none() && self.colours.is_empty() {
+            return Ok(());
+        }
+        self.colours.resize(self.positions.len() - 1, [1.0; 3]);
+        self.colours.push(rgb.unwrap_or([1.0; 3]));
+        Ok(())
+    }
+
     /// Fan-triangulates a polygon of already range-checked indices.
     pub(crate) fn push_polygon(
         &mut self,
@@ -253,6 +282,12 @@ impl Mesh {
             ));
         }
         let n = self.positions.len();
+        if !self.colours.is_empty() && self.colours.len() != n {
+            return Err(VoxelError::invalid(name, format!("{} vertex colours for {n} vertices", self.colours.len())));
+        }
+        if let Some(c) = self.colours.iter().position(|c| !c.iter().all(|v| (0.0..=1.0).contains(v))) {
+            return Err(VoxelError::invalid(name, format!("vertex colour {c} {:?} is outside [0, 1]", self.colours[c])));
+        }
         if let Some(t) = self
             .triangles
             .iter()
@@ -285,9 +320,14 @@ impl Mesh {
             .sum()
     }
 
-    /// Appends another mesh (as a separate part: no vertices are merged).
+    /// Appends another mesh (as a separate part: no vertices are merged). Colours stay one
+    /// per vertex: white for the side that had none, when the other had some.
     pub fn append(&mut self, other: &Mesh) {
         let base = self.positions.len() as u32;
+        if !self.colours.is_empty() || !other.colours.is_empty() {
+            self.colours.resize(self.positions.len(), [1.0; 3]);
+            self.colours.extend((0..other.positions.len()).map(|i| other.colours.get(i).copied().unwrap_or([1.0; 3])));
+        }
         self.positions.extend_from_slice(&other.positions);
         self.triangles
             .extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
@@ -317,6 +357,7 @@ impl Mesh {
         Mesh {
             positions,
             triangles,
+            colours: Vec::new(),
         }
     }
 
@@ -341,6 +382,7 @@ impl Mesh {
         Mesh {
             positions,
             triangles,
+            colours: Vec::new(),
         }
     }
 
@@ -372,6 +414,7 @@ impl Mesh {
         Mesh {
             positions,
             triangles,
+            colours: Vec::new(),
         }
     }
 }

@@ -13,6 +13,7 @@
 pub mod binvox;
 mod load;
 pub mod mesh;
+mod mesh_colour;
 pub mod ply;
 pub mod safetensors_io;
 pub mod shapes;

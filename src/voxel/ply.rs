@@ -1,6 +1,7 @@
-//! PLY loader (ascii, binary_little_endian and binary_big_endian): keeps `vertex` x, y, z and
-//! `face` `vertex_indices` (or `vertex_index`) lists; every other element and property is read
-//! past using its declared type, so scanner output with extra properties loads too.
+//! PLY loader (ascii, binary_little_endian and binary_big_endian): keeps `vertex` x, y, z (and
+//! red, green, blue when present) and `face` `vertex_indices` (or `vertex_index`) lists; every
+//! other element and property is read past using its declared type, so scanner output with
+//! extra properties loads too.
 
 use super::{MAX_TRIANGLES, MAX_VERTICES, Mesh, VoxelError};
 
@@ -81,8 +82,13 @@ pub fn parse_ply(bytes: &[u8], name: &str) -> Result<Mesh, VoxelError> {
             mesh.positions.reserve(el.count.min(bytes.len() / 12));
             n_vertices = Some(el.count);
         }
+        // Vertex colours: `red`, `green`, `blue`, integers scaled by 255 (uchar, as scanners
+        // and Blender write them) or floats in [0, 1].
+        let has_colour = is_vertex
+            && ["red", "green", "blue"].iter().all(|c| el.props.iter().any(|p| matches!(p, Property::Scalar(n, _) if n == c)));
         for _ in 0..el.count {
             let mut p = [0.0f32; 3];
+            let mut rgb = [1.0f32; 3];
             for prop in &el.props {
                 match prop {
                     Property::Scalar(pname, ty) => {
@@ -91,6 +97,9 @@ pub fn parse_ply(bytes: &[u8], name: &str) -> Result<Mesh, VoxelError> {
                             (is_vertex, ["x", "y", "z"].iter().position(|a| a == pname))
                         {
                             p[axis] = v as f32;
+                        }
+                        if let (true, Some(c)) = (has_colour, ["red", "green", "blue"].iter().position(|a| a == pname)) {
+                            rgb[c] = if ty.float { v as f32 } else { v as f32 / 255.0 };
                         }
                     }
                     Property::List(pname, count_ty, item_ty) => {
@@ -128,6 +137,8 @@ pub fn parse_ply(bytes: &[u8], name: &str) -> Result<Mesh, VoxelError> {
             if is_vertex {
                 let line = reader.line();
                 mesh.push_vertex(p, name, line)
+                    .map_err(|e| reader.rewrap(e, name))?;
+                mesh.set_last_colour(has_colour.then_some(rgb), name, line)
                     .map_err(|e| reader.rewrap(e, name))?;
             }
         }

@@ -140,14 +140,23 @@ pub fn voxelize(mesh: &Mesh, opts: &VoxelizeOptions) -> Result<VoxelGrid, VoxelE
     let norm = Normalization::fit(mesh, &fine)?;
     let surface = mark_surface(mesh, &norm);
     if !opts.fill {
-        return VoxelGrid::new([n, n, n], box_downsample(&surface, None, n, k));
+        return with_mesh_colour(VoxelGrid::new([n, n, n], box_downsample(&surface, None, n, k))?, mesh, opts);
     }
     let solid = fill_from_outside(&surface, [n * k; 3]);
     let mut occ = box_downsample(&solid, Some(&surface), n, k);
     if k > 1 {
         keep_thin_parts(&mut occ, n);
     }
-    VoxelGrid::new([n, n, n], occ)
+    with_mesh_colour(VoxelGrid::new([n, n, n], occ)?, mesh, opts)
+}
+
+/// The grid with the mesh's vertex colours ([`super::mesh_colour`]), when it has some.
+fn with_mesh_colour(grid: VoxelGrid, mesh: &Mesh, opts: &VoxelizeOptions) -> Result<VoxelGrid, VoxelError> {
+    if mesh.colours.is_empty() {
+        return Ok(grid);
+    }
+    let colour = super::mesh_colour::colour_grid(mesh, &Normalization::fit(mesh, opts)?, grid.occupancy());
+    grid.with_colour(colour)
 }
 
 /// Occupancy [`keep_thin_parts`] raises thin-part voxels to: their iso-surface then sits

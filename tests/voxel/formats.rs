@@ -410,3 +410,20 @@ fn vox_round_trip_axes_and_malformed_files() {
     }
     err_naming(vox::read(tmp("missing.vox")), "missing.vox");
 }
+
+/// Vertex colours: OBJ `v x y z r g b` and PLY `red green blue` (uchar, scaled by 255) load
+/// one colour per vertex (white for OBJ vertices given none once one has some); a colour
+/// outside [0, 1] is an error naming the line.
+#[test]
+fn vertex_colours_load_from_obj_and_ply() {
+    let obj = Mesh::parse_obj("v 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0 0 0.5 1\nf 1 2 3\n", "c.obj").unwrap();
+    assert_eq!(obj.colours, vec![[1.0, 0.0, 0.0], [1.0, 1.0, 1.0], [0.0, 0.5, 1.0]]);
+    assert!(Mesh::parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "g.obj").unwrap().colours.is_empty());
+    let err = Mesh::parse_obj("v 0 0 0\nv 1 0 0 255 0 0\n", "bad.obj").unwrap_err().to_string();
+    assert!(err.contains("bad.obj") && err.contains("line 2") && err.contains("[0, 1]"), "{err}");
+    let ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+               property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 1\n\
+               property list uchar int vertex_indices\nend_header\n0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 51\n3 0 1 2\n";
+    let m = Mesh::parse_ply_bytes(ply.as_bytes(), "c.ply").unwrap();
+    assert_eq!(m.colours, vec![[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.2]]);
+}

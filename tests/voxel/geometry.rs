@@ -152,6 +152,7 @@ fn voxelize_rejects_bad_meshes() {
     let bad = Mesh {
         positions: vec![[0.0; 3]],
         triangles: vec![[0, 1, 2]],
+        colours: Vec::new(),
     };
     assert!(
         voxelize(&bad, &VoxelizeOptions::default())
@@ -320,4 +321,39 @@ fn antialiased_sphere_is_fractional_with_analytic_volume() {
     assert_eq!(VoxelizeOptions::smooth(64).effective_supersample(), 4);
     assert_eq!(VoxelizeOptions::smooth(256).effective_supersample(), 2);
     assert_eq!(VoxelizeOptions::smooth(1024).effective_supersample(), 1);
+}
+
+/// A red box and a blue box side by side, voxelised: every occupied voxel takes the colour of
+/// its own box, inside as well as on the surface, and a mesh without colours gives a grid
+/// without colour.
+#[test]
+fn voxelising_carries_vertex_colours_through_the_solid() {
+    let paint = |mut m: Mesh, rgb: [f32; 3]| {
+        m.colours = vec![rgb; m.positions.len()];
+        m
+    };
+    let mut mesh = paint(Mesh::cuboid(Vec3::new(-0.5, 0.0, 0.0), Vec3::new(0.45, 0.3, 0.3), Mat3::IDENTITY), [1.0, 0.0, 0.0]);
+    mesh.append(&paint(Mesh::cuboid(Vec3::new(0.5, 0.0, 0.0), Vec3::new(0.45, 0.3, 0.3), Mat3::IDENTITY), [0.0, 0.0, 1.0]));
+    let n = 24;
+    let grid = voxelize(&mesh, &VoxelizeOptions { resolution: n, ..Default::default() }).unwrap();
+    let c = grid.colour().expect("colour carried");
+    let (mut red, mut blue) = (0, 0);
+    for d in 0..n {
+        for h in 0..n {
+            for w in 0..n {
+                let i = grid.index(d, h, w);
+                if grid.occupancy()[i] < 0.5 {
+                    continue;
+                }
+                let rgb = [c[i], c[grid.len() + i], c[2 * grid.len() + i]];
+                // x maps to D: the red box is the low half.
+                let want = if d < n / 2 { [1.0, 0.0, 0.0] } else { [0.0, 0.0, 1.0] };
+                assert_eq!(rgb, want, "voxel ({d}, {h}, {w})");
+                if d < n / 2 { red += 1 } else { blue += 1 }
+            }
+        }
+    }
+    assert!(red > 100 && blue > 100, "{red} red and {blue} blue voxels");
+    let grey = voxelize(&Mesh::cuboid(Vec3::ZERO, Vec3::splat(0.4), Mat3::IDENTITY), &VoxelizeOptions::default()).unwrap();
+    assert!(grey.colour().is_none());
 }
