@@ -56,6 +56,7 @@ fn run(a: Args) -> Result<(), Box<dyn std::error::Error>> {
             out: dir.join(format!("lr{lr}.ckpt")),
             steps: a.steps,
             resume: None,
+            init: None,
             batch: a.batch,
             lr,
             decay: 1.0,

@@ -210,6 +210,14 @@ fn weights_of_another_shader_render_with_its_head() {
     let refused = Command::new(env!("CARGO_BIN_EXE_rendernet")).args(["eval", "--shader", "phong", "--data", d]).output().unwrap();
     let err = String::from_utf8_lossy(&refused.stderr);
     assert!(!refused.status.success() && err.contains("--shader phong") && err.contains("holds ao images"), "{err}");
+    // `train --init`: the Phong network's trunk under a fresh AO head.
+    let phong = dir.join("phong.safetensors");
+    std::fs::write(&phong, TINY_PHONG_WEIGHTS).unwrap();
+    let init_ckpt = dir.join("init.ckpt");
+    let out = rendernet(&["train", "--data", d, "--out", init_ckpt.to_str().unwrap(), "--init", phong.to_str().unwrap(), "--steps", "1", "--crop", "16", "--eval-samples", "1"]);
+    assert!(out.contains("tensors taken, 2 initialised fresh (head.image.weight, head.image.bias)"), "{out}");
+    let refused = Command::new(env!("CARGO_BIN_EXE_rendernet")).args(["train", "--data", d, "--out", "x.ckpt", "--init", "a", "--resume", "b"]).output().unwrap();
+    assert!(!refused.status.success() && String::from_utf8_lossy(&refused.stderr).contains("--init"));
     let refused = Command::new(env!("CARGO_BIN_EXE_rendernet")).args(["render", "--shader", "contour", "--out", png.to_str().unwrap()]).output().unwrap();
     let err = String::from_utf8_lossy(&refused.stderr);
     assert!(!refused.status.success() && err.contains("--shader contour") && err.contains("ao (tiny)") && err.contains("--weights"), "{err}");

@@ -33,6 +33,11 @@ pub struct TrainArgs {
     /// Resume from this checkpoint (same preset and dataset shader).
     #[arg(long)]
     resume: Option<PathBuf>,
+    /// Start a fresh run from these weights wherever a tensor's name and shape match (a
+    /// Phong network's trunk under a contour, toon or AO head, or grey weights under a colour
+    /// network's first conv); the other layers start from their initialisation.
+    #[arg(long, conflicts_with = "resume")]
+    init: Option<PathBuf>,
     /// Samples per step.
     #[arg(long, default_value_t = 1)]
     batch: usize,
@@ -97,6 +102,7 @@ pub fn run(a: TrainArgs) -> Result<()> {
         out: a.out,
         steps: a.steps,
         resume: a.resume,
+        init: a.init,
         batch: a.batch.max(1),
         lr: a.lr,
         decay: a.decay,
@@ -122,6 +128,15 @@ pub fn run(a: TrainArgs) -> Result<()> {
                 println!("step {step}/{}: {msg}", bar.length().unwrap_or(0));
             }
             bar.set_message(msg);
+        }
+        Progress::Init { loaded, fresh } => {
+            let init = cfg.init.as_ref().map(|p| p.display().to_string()).unwrap_or_default();
+            let line = format!("started from {init}: {loaded} tensors taken, {} initialised fresh ({})", fresh.len(), fresh.join(", "));
+            if bar.is_hidden() {
+                println!("{line}");
+            } else {
+                bar.println(line);
+            }
         }
         Progress::Eval { step, psnr, checkpoint } => {
             last_psnr = format!("{psnr:.2}");

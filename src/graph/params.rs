@@ -187,6 +187,30 @@ impl Executor {
         self.take_params(gpu, Path::new(&label), &mut file, &bad)
     }
 
+    /// Starts from another model's weights where they fit: every parameter whose name and
+    /// shape match a tensor of `bytes` takes its values (a checkpoint's Adam state is
+    /// ignored); the rest keep their initialisation. For fine-tuning one trunk under new heads
+    /// (a Phong network's layers under a contour head). Returns the names loaded and the
+    /// names left as initialised; an error when nothing matches (another preset's weights).
+    pub fn load_params_matching(&mut self, gpu: &Gpu, bytes: &[u8], name: &str) -> Result<(Vec<String>, Vec<String>)> {
+        let (file, _, _) = decode(bytes, name)?;
+        let (mut loaded, mut fresh) = (Vec::new(), Vec::new());
+        for v in self.graph().params() {
+            let info = self.graph().info(v).clone();
+            match file.get(&info.name) {
+                Some((shape, vals)) if !is_adam_state(&info.name) && *shape == info.shape => {
+                    self.feed(gpu, v, vals)?;
+                    loaded.push(info.name);
+                }
+                _ => fresh.push(info.name),
+            }
+        }
+        if loaded.is_empty() {
+            return Err(Error::Invalid(format!("{name}: no tensor matches the model's parameters by name and shape (another preset's weights?)")));
+        }
+        Ok((loaded, fresh))
+    }
+
     /// Feeds every parameter from `file`, which must hold exactly the parameters (a name in
     /// `bad` is present but unusable, for the reason given), or lists every problem.
     fn take_params(

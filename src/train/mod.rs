@@ -32,6 +32,9 @@ pub struct TrainConfig {
     pub steps: u64,
     /// Checkpoint to resume from.
     pub resume: Option<PathBuf>,
+    /// Weights to start a fresh run from where names and shapes match
+    /// ([`Executor::load_params_matching`]), e.g. a Phong network's trunk for a contour head.
+    pub init: Option<PathBuf>,
     /// Batch size.
     pub batch: usize,
     /// Initial learning rate.
@@ -99,6 +102,9 @@ pub enum Progress {
     Step { step: u64, loss: f32, lr: f32, window: usize, images_per_s: f32 },
     /// An evaluation finished and a checkpoint was written.
     Eval { step: u64, psnr: f32, checkpoint: PathBuf },
+    /// A fresh run started from `--init` weights: the parameters taken from them, and those
+    /// left as initialised (new heads, reshaped layers).
+    Init { loaded: usize, fresh: Vec<String> },
 }
 
 /// The camera-grid window side at `step`: the paper's patch schedule, growing from 1/8 to
@@ -125,13 +131,19 @@ struct CropPhase {
     window: usize,
     net: RenderNet,
     ex: Executor,
+    /// What `cfg.init` filled (loaded, fresh), on a fresh run's first phase.
+    init: Option<(Vec<String>, Vec<String>)>,
 }
 
 fn crop_phase(gpu: &Gpu, cfg: &TrainConfig, head: Head, window: usize, from: Option<&std::path::Path>) -> Result<CropPhase> {
     let net = RenderNet::build(&cfg.preset, head, cfg.batch, [window, window], true)?;
     let mut ex = Executor::new(gpu, net.graph.clone(), cfg.seed)?;
+    let mut init = None;
     if let Some(ckpt) = from {
         ex.load_checkpoint(gpu, ckpt)?;
+    } else if let Some(path) = &cfg.init {
+        let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.display().to_string(), source: e })?;
+        init = Some(ex.load_params_matching(gpu, &bytes, &path.display().to_string())?);
     }
     // The transposed convs stay resize-convolutions ("nearest upsample + 3x3 conv"), which
     // cannot grow a checkerboard, at the transposed conv's cost (see `graph::resize_conv`).
@@ -141,7 +153,7 @@ fn crop_phase(gpu: &Gpu, cfg: &TrainConfig, head: Head, window: usize, from: Opt
             ex.keep_resize_conv(gpu, v)?;
         }
     }
-    Ok(CropPhase { window, net, ex })
+    Ok(CropPhase { window, net, ex, init })
 }
 
 /// Trains as configured, calling `report` after every step and evaluation. Returns the
@@ -198,6 +210,9 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
         }
     }
     let mut cur = crop_phase(gpu, cfg, head, window(start), resume)?;
+    if let Some((loaded, fresh)) = cur.init.take() {
+        report(Progress::Init { loaded: loaded.len(), fresh });
+    }
     let names: Vec<String> = cur.net.targets.iter().map(|(n, _)| n.clone()).collect();
     // The curve lives in <out>.log.csv (step,loss,psnr), appended every evaluation and read
     // back on resume, so the PNG covers the whole run across interruptions.
