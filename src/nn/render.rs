@@ -55,8 +55,12 @@ pub fn shipped_phong_weights(preset: &Preset) -> Option<&'static [u8]> {
     shipped_weights(preset, Shader::Phong)
 }
 
-/// The shipped weights of `preset` trained for `shader`, if any.
+/// The shipped weights of `preset` trained for `shader`, if any (none for a colour preset:
+/// every shipped file takes grey grids).
 pub fn shipped_weights(preset: &Preset, shader: Shader) -> Option<&'static [u8]> {
+    if preset.colour {
+        return None;
+    }
     match (preset.name, shader) {
         ("tiny", Shader::Phong) => Some(TINY_PHONG_WEIGHTS),
         ("nano", Shader::Phong) => Some(NANO_PHONG_WEIGHTS),
