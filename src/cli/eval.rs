@@ -59,7 +59,8 @@ pub fn run(a: EvalArgs) -> Result<()> {
         Some(w) => evaluate(&gpu, &p, head, w, &ds, a.samples)?,
         None => {
             let w = shipped_weights(&p, shader).ok_or_else(|| {
-                Error::Invalid(format!("no {}-{} weights are shipped; pass --weights FILE", p.name, shader.name()))
+                let colour = if p.colour { " for coloured voxels (the dataset is painted)" } else { "" };
+                Error::Invalid(format!("no {}-{} weights are shipped{colour}; pass --weights FILE", p.name, shader.name()))
             })?;
             evaluate_bytes(&gpu, &p, head, w, &format!("embedded {}-{} weights", p.name, shader.name()), &ds, a.samples)?
         }
