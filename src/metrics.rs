@@ -91,6 +91,9 @@ impl Scores {
     /// (`|v - background|`), so the object box and the masks find the drawing, not the whole
     /// white frame. PSNR is unchanged by the mapping.
     pub fn on_background(pred: &Image, truth: &Image, background: f32) -> Self {
+        if background == 0.0 {
+            return Scores::of(pred, truth); // the mapping is the identity (the scores clamp too)
+        }
         Scores::of(&from_background(pred, background), &from_background(truth, background))
     }
 

@@ -69,11 +69,12 @@ pub fn shipped_weights(preset: &Preset, shader: Shader) -> Option<&'static [u8]>
     }
 }
 
-/// The shaders some preset has shipped weights for, with those presets' names.
+/// The shaders some preset has shipped weights for, with those presets' names (the presets of
+/// [`SHIPPED`], the only ones with weights in the binary).
 pub fn shipped_shaders() -> Vec<(Shader, Vec<&'static str>)> {
     Shader::ALL
         .into_iter()
-        .map(|s| (s, ["nano", "tiny"].into_iter().filter(|&n| Preset::by_name(n).is_ok_and(|p| shipped_weights(&p, s).is_some())).collect::<Vec<_>>()))
+        .map(|s| (s, SHIPPED.iter().map(|m| m.preset).filter(|&n| Preset::by_name(n).is_ok_and(|p| shipped_weights(&p, s).is_some())).collect::<Vec<_>>()))
         .filter(|(_, names)| !names.is_empty())
         .collect()
 }

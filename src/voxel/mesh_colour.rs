@@ -3,7 +3,7 @@
 //! spreads through the solid from the surface inwards, so every occupied voxel has one (the
 //! renderer weights colour by occupancy, so empty voxels need none).
 
-use super::voxelize::{Normalization, triangle_overlaps_box};
+use super::voxelize::{Normalization, for_each_cell_near};
 use super::Mesh;
 use glam::DVec3;
 use std::collections::VecDeque;
@@ -31,24 +31,16 @@ pub(crate) fn colour_grid(mesh: &Mesh, norm: &Normalization, occ: &[f32]) -> Vec
     let n = norm.resolution;
     let cells = n * n * n;
     let (mut sum, mut count) = (vec![DVec3::ZERO; cells], vec![0u32; cells]);
-    let range = |lo: f64, hi: f64| (lo.floor().max(0.0) as usize).min(n - 1)..=(hi.floor().max(0.0) as usize).min(n - 1);
     for t in &mesh.triangles {
         let v = t.map(|i| DVec3::from(norm.to_voxel(mesh.positions[i as usize])));
         let c = t.map(|i| DVec3::from(mesh.colours[i as usize].map(f64::from)));
-        let (lo, hi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
-        for d in range(lo.x, hi.x) {
-            for h in range(lo.y, hi.y) {
-                for w in range(lo.z, hi.z) {
-                    let centre = DVec3::new(d as f64, h as f64, w as f64) + 0.5;
-                    if triangle_overlaps_box(&v, centre, 0.5) {
-                        let b = weights(&v, centre);
-                        let i = (d * n + h) * n + w;
-                        sum[i] += c[0] * b[0] + c[1] * b[1] + c[2] * b[2];
-                        count[i] += 1;
-                    }
-                }
+        for_each_cell_near(&v, n, |i, centre, overlaps| {
+            if overlaps() {
+                let b = weights(&v, centre);
+                sum[i] += c[0] * b[0] + c[1] * b[1] + c[2] * b[2];
+                count[i] += 1;
             }
-        }
+        });
     }
     // Breadth-first from the surface: an occupied voxel without colour takes the colour of
     // the neighbour that reached it first (the nearest surface, in 6-connected steps).

@@ -218,36 +218,37 @@ fn box_downsample(cells: &[bool], half: Option<&[bool]>, n: usize, k: usize) -> 
     counts.into_iter().map(|c| c as f32 * inv).collect()
 }
 
+/// Walks the cells of an `n^3` grid inside the bounds of triangle `v` (voxel coordinates),
+/// calling `visit(index, centre, overlaps)`; `overlaps()` runs the exact triangle/cell test,
+/// so a caller that already knows a cell's answer can skip it. Triangles wholly outside the
+/// grid visit nothing. Shared by the voxeliser and the colour splat (`mesh_colour`).
+pub(crate) fn for_each_cell_near(v: &[DVec3; 3], n: usize, mut visit: impl FnMut(usize, DVec3, &dyn Fn() -> bool)) {
+    let (lo, hi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
+    if hi.cmplt(DVec3::ZERO).any() || lo.cmpgt(DVec3::splat(n as f64)).any() {
+        return;
+    }
+    let clamp = |x: f64| (x.floor().max(0.0) as usize).min(n - 1);
+    for d in clamp(lo.x)..=clamp(hi.x) {
+        for h in clamp(lo.y)..=clamp(hi.y) {
+            for w in clamp(lo.z)..=clamp(hi.z) {
+                let centre = DVec3::new(d as f64, h as f64, w as f64) + 0.5;
+                visit((d * n + h) * n + w, centre, &|| triangle_overlaps_box(v, centre, 0.5));
+            }
+        }
+    }
+}
+
 /// Marks every voxel that a triangle touches, testing only voxels in the triangle's bounds.
 fn mark_surface(mesh: &Mesh, norm: &Normalization) -> Vec<bool> {
     let n = norm.resolution;
     let mut cells = vec![false; n * n * n];
-    let cell_range = |lo: f64, hi: f64| {
-        let clamp = |x: f64| (x.floor().max(0.0) as usize).min(n - 1);
-        clamp(lo)..=clamp(hi)
-    };
     for t in &mesh.triangles {
         let v = t.map(|i| DVec3::from(norm.to_voxel(mesh.positions[i as usize])));
-        let (lo, hi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
-        if hi.cmplt(DVec3::ZERO).any() || lo.cmpgt(DVec3::splat(n as f64)).any() {
-            continue;
-        }
-        for d in cell_range(lo.x, hi.x) {
-            for h in cell_range(lo.y, hi.y) {
-                for w in cell_range(lo.z, hi.z) {
-                    let i = (d * n + h) * n + w;
-                    if !cells[i]
-                        && triangle_overlaps_box(
-                            &v,
-                            DVec3::new(d as f64, h as f64, w as f64) + 0.5,
-                            0.5,
-                        )
-                    {
-                        cells[i] = true;
-                    }
-                }
+        for_each_cell_near(&v, n, |i, _, overlaps| {
+            if !cells[i] && overlaps() {
+                cells[i] = true;
             }
-        }
+        });
     }
     cells
 }
