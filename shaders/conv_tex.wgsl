@@ -60,7 +60,9 @@ fn conv_fast_pack_weights_tex(@builtin(global_invocation_id) gid: vec3<u32>, @bu
     textureStore(twdst, vec2<u32>(x, y), v);
 }
 
-// ---- forward: a subgroup of 8 lanes = 8 outputs along W; each lane 4 rows (H) x 16 channels --
+// ---- forward: a subgroup of 8 lanes = 8 outputs along W; each lane 8 rows (H) x 16 channels --
+// 8 rows rather than 4: each shared weight set then feeds twice the FMAs (measured 1.25x on
+// conv3d 16->16 3^3 on 32^3; the accumulators live in memory either way on lavapipe).
 @group(0) @binding(1) var tx: texture_3d<f32>;
 @group(0) @binding(2) var tw: texture_2d<f32>;
 
@@ -112,7 +114,7 @@ fn conv_fast_forward_tex(ids: LaneIds) {
     let lane = tl.y;
     let base = tl.z;
     let wblocks = (p.ow + 7u) / 8u;
-    let hblocks = (p.oh + 3u) / 4u;
+    let hblocks = (p.oh + 7u) / 8u;
     var r = t;
     let wb = r % wblocks; r /= wblocks;
     let hb = r % hblocks; r /= hblocks;
@@ -120,10 +122,10 @@ fn conv_fast_forward_tex(ids: LaneIds) {
     let cg = r % p.co16;
     let n = r / p.co16;
     let ow = wb * 8u + lane;
-    let oh0 = hb * 4u;
+    let oh0 = hb * 8u;
     let cq = p.cpad / 4u;
     var a0 = Acc(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
-    var a1 = a0; var a2 = a0; var a3 = a0;
+    var a1 = a0; var a2 = a0; var a3 = a0; var a4 = a0; var a5 = a0; var a6 = a0; var a7 = a0;
     for (var kd = 0u; kd < p.kd; kd++) {
         let zd = i32(od * p.sd + kd) - i32(p.pd);
         if (zd < 0 || zd >= i32(p.id)) { continue; }
@@ -150,6 +152,10 @@ fn conv_fast_forward_tex(ids: LaneIds) {
                     a1 = mac(a1, tex_x(n, q, u32(zd), zh + zsh, zw), w);
                     a2 = mac(a2, tex_x(n, q, u32(zd), zh + 2 * zsh, zw), w);
                     a3 = mac(a3, tex_x(n, q, u32(zd), zh + 3 * zsh, zw), w);
+                    a4 = mac(a4, tex_x(n, q, u32(zd), zh + 4 * zsh, zw), w);
+                    a5 = mac(a5, tex_x(n, q, u32(zd), zh + 5 * zsh, zw), w);
+                    a6 = mac(a6, tex_x(n, q, u32(zd), zh + 6 * zsh, zw), w);
+                    a7 = mac(a7, tex_x(n, q, u32(zd), zh + 7 * zsh, zw), w);
                 }
             }
         }
@@ -161,6 +167,10 @@ fn conv_fast_forward_tex(ids: LaneIds) {
     put_row(n, co, pos + p.ysh, ow, oh0 + 1u, a1);
     put_row(n, co, pos + 2u * p.ysh, ow, oh0 + 2u, a2);
     put_row(n, co, pos + 3u * p.ysh, ow, oh0 + 3u, a3);
+    put_row(n, co, pos + 4u * p.ysh, ow, oh0 + 4u, a4);
+    put_row(n, co, pos + 5u * p.ysh, ow, oh0 + 5u, a5);
+    put_row(n, co, pos + 6u * p.ysh, ow, oh0 + 6u, a6);
+    put_row(n, co, pos + 7u * p.ysh, ow, oh0 + 7u, a7);
 }
 
 // ---- backward weight: lanes = 8 (tap, input channel quad) pairs; dy shared by shuffles ----

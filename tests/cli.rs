@@ -64,6 +64,14 @@ fn bench_json_reports_speed_against_the_same_run_ceiling() {
     }
 }
 
+/// `bench --profile` times the whole-network rows; a filter that leaves them out is refused.
+#[test]
+fn bench_profile_needs_the_whole_network_rows() {
+    let out = rendernet().args(["bench", "--profile", "--filter", "conv3d"]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && stderr.contains("--profile") && stderr.contains("conv3d"), "{stderr}");
+}
+
 #[test]
 fn bench_rejects_an_unknown_kernel_by_name() {
     let out = rendernet().args(["bench", "--kernel", "fastest"]).output().unwrap();

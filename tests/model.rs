@@ -306,6 +306,50 @@ fn training_steps_after_the_first_create_no_gpu_objects() {
 
 }
 
+/// `Executor::profile` times every op of a run in schedule order: each forward node, then
+/// the backward of the nodes on the loss's path (loss first), then Adam; it changes no result,
+/// and turning it off leaves no times behind.
+#[test]
+fn profiled_runs_time_every_op_in_schedule_order() {
+    use rendernet::graph::{Executor, profile::by_kind};
+    use rendernet::ops::adam::Adam;
+    let gpu = Gpu::new().unwrap();
+    if !gpu.has_timestamps() {
+        eprintln!("skipped: {} has no timestamps inside compute passes", gpu.info.name);
+        return;
+    }
+    let net = RenderNet::build(&Preset::nano(), Head::Phong(phong_of(&Light::default())), 1, [16, 16], true).unwrap();
+    let mut ex = Executor::new(&gpu, net.graph.clone(), 5).unwrap();
+    ex.keep(net.image);
+    ex.forward(&gpu).unwrap();
+    let plain = ex.read(&gpu, net.image).unwrap();
+    ex.profile(&gpu, true).unwrap();
+    ex.forward(&gpu).unwrap();
+    assert_eq!(ex.read(&gpu, net.image).unwrap(), plain, "profiling changed the image");
+    let names: Vec<String> = ex.op_times().iter().map(|t| t.name.clone()).collect();
+    let forward: Vec<String> = net.graph.nodes().iter().map(|n| format!("{} forward", n.name)).collect();
+    assert_eq!(names, forward);
+    let kinds: Vec<&str> = ex.op_times().iter().map(|t| t.kind.as_str()).collect();
+    assert_eq!(kinds, net.graph.nodes().iter().map(|n| n.op.name()).collect::<Vec<_>>());
+    ex.train_step(&gpu, net.loss.unwrap(), &Adam::new(1e-3)).unwrap();
+    let t = ex.op_times();
+    assert!(t.iter().all(|t| t.ns.is_finite() && t.ns >= 0.0), "{t:?}");
+    assert_eq!(t[..forward.len()].iter().map(|t| t.name.clone()).collect::<Vec<_>>(), forward);
+    let backward: Vec<&str> = t[forward.len()..t.len() - 1].iter().map(|t| t.name.as_str()).collect();
+    assert_eq!(backward.first(), Some(&"loss backward"), "{backward:?}");
+    assert_eq!(backward.last(), Some(&"enc3d.conv1 backward"), "{backward:?}");
+    assert!(backward.iter().all(|n| n.ends_with(" backward")), "{backward:?}");
+    assert_eq!(t.last().unwrap().name, "adam");
+    let total: f64 = t.iter().map(|t| t.ns).sum();
+    let kinds = by_kind(t);
+    assert_eq!(kinds.iter().map(|k| k.2).sum::<usize>(), t.len());
+    assert!((kinds.iter().map(|k| k.1).sum::<f64>() - total).abs() <= 1e-6 * total.max(1.0));
+    assert!(kinds.windows(2).all(|w| w[0].1 >= w[1].1), "kinds not sorted slowest first");
+    ex.profile(&gpu, false).unwrap();
+    ex.forward(&gpu).unwrap();
+    assert!(ex.op_times().is_empty());
+}
+
 /// The EC baselines: whole 128 px frames from a 32^3 grid, pose and light; a camera-grid
 /// crop is refused by name (their fully-connected layers see the whole frame); an image head
 /// takes no light; both fit the < 5 MB budget for shipped weights.

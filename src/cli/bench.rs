@@ -6,7 +6,8 @@ use rendernet::bench::{self, Clock};
 use rendernet::ops::conv::{Conv, ConvKernel, Padding, Pass};
 use rendernet::ops::conv_transpose::ConvTranspose;
 use rendernet::ops::projection;
-use rendernet::graph::Executor;
+use rendernet::graph::profile::by_kind;
+use rendernet::graph::{Executor, OpTime};
 use rendernet::nn::rendernet::{Head, Preset, RenderNet, phong_of};
 use rendernet::ops::adam::Adam;
 use rendernet::nn::render::{CROP_MARGIN, object_window};
@@ -30,6 +31,11 @@ pub struct BenchArgs {
     /// Kernels of one case are sampled in turn, so they see the same machine load.
     #[arg(long, default_value = "all")]
     kernel: String,
+    /// After the whole-network rows, time every op of one run of each (GPU timestamps between
+    /// ops, inside the run's one pass) and print the time per op kind and the slowest ops:
+    /// where a forward or a training step spends its time.
+    #[arg(long)]
+    profile: bool,
 }
 
 /// Records one call of a case's kernel.
@@ -177,7 +183,7 @@ fn finite(v: f64) -> Option<f64> {
 /// Whole-network entries: a RenderNet forward at full size and a training step on the
 /// largest patch of the schedule, with the executor's dispatch, submit and memory figures.
 /// Timed by wall clock around each submit and wait (the executor owns its encoder).
-fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine) -> Result<Vec<(String, serde_json::Value)>> {
+fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine, profile: bool) -> Result<Vec<(String, serde_json::Value)>> {
     let p = Preset::tiny();
     let head = Head::Phong(phong_of(&Light::default()));
     let mut rows = Vec::new();
@@ -217,9 +223,41 @@ fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine) -> Result<Vec<(String, serd
             "rendernet", shape, pass, "auto", 100.0 * gflops / m.ceiling, stats.dispatches, stats.submits, again.created,
             stats.pool_bytes as f64 / 1048576.0, stats.tensor_bytes as f64 / 1048576.0, stats.scratch_bytes as f64 / 1048576.0
         );
-        rows.push((text, json));
+        if profile {
+            ex.profile(gpu, true)?;
+            step(&mut ex)?;
+            let times = ex.op_times();
+            json["profile"] = profile_json(times);
+            rows.push((format!("{text}\n{}", profile_text(times, ms)), json));
+            ex.profile(gpu, false)?;
+        } else {
+            rows.push((text, json));
+        }
     }
     Ok(rows)
+}
+
+/// The ops of one profiled run, slowest first, as JSON: `{name, kind, ms}`.
+fn profile_json(times: &[OpTime]) -> serde_json::Value {
+    let mut v: Vec<&OpTime> = times.iter().collect();
+    v.sort_by(|a, b| b.ns.total_cmp(&a.ns));
+    v.iter().map(|t| serde_json::json!({"name": t.name, "kind": t.kind, "ms": t.ns * 1e-6})).collect()
+}
+
+/// Time per op kind and the 10 slowest ops of one profiled run whose wall time was `wall_ms`.
+fn profile_text(times: &[OpTime], wall_ms: f64) -> String {
+    let total: f64 = times.iter().map(|t| t.ns).sum::<f64>() * 1e-6;
+    let mut s = format!("  profile: {total:.1} ms on the GPU between the first and last op ({wall_ms:.1} ms wall, median)\n");
+    for (kind, ns, count) in by_kind(times) {
+        s += &format!("    {kind:<16} {:>8.2} ms {:>5.1}%  ({count} steps)\n", ns * 1e-6, 100.0 * ns * 1e-6 / total.max(1e-9));
+    }
+    let mut v: Vec<&OpTime> = times.iter().collect();
+    v.sort_by(|a, b| b.ns.total_cmp(&a.ns));
+    s += "    slowest:\n";
+    for t in v.iter().take(10) {
+        s += &format!("      {:<36} {:>8.2} ms\n", t.name, t.ns * 1e-6);
+    }
+    s.trim_end().to_string()
 }
 
 /// Runs the benchmark and prints a table or JSON.
@@ -227,6 +265,13 @@ pub fn run(a: BenchArgs) -> Result<()> {
     if let Some(bad) = a.kernel.split(',').map(str::trim).find(|k| *k != "all" && !KERNELS.iter().any(|(n, _)| n == k)) {
         return Err(rendernet::Error::Invalid(format!(
             "--kernel: unknown kernel '{bad}'; expected a comma-separated list of reference, fast, texture, or all"
+        )));
+    }
+    let with_model = a.filter.as_deref().is_none_or(|f| "rendernet".contains(f));
+    if a.profile && !with_model {
+        return Err(rendernet::Error::Invalid(format!(
+            "--profile times the whole-network (rendernet) rows, which --filter {} leaves out",
+            a.filter.as_deref().unwrap_or_default()
         )));
     }
     let gpu = Gpu::new()?;
@@ -280,8 +325,8 @@ pub fn run(a: BenchArgs) -> Result<()> {
         }
         i = j;
     }
-    if a.filter.as_deref().is_none_or(|f| "rendernet".contains(f)) {
-        for (text, row) in model_rows(&gpu, a.repeat, &m)? {
+    if with_model {
+        for (text, row) in model_rows(&gpu, a.repeat, &m, a.profile)? {
             if a.json {
                 json.push(row);
             } else {

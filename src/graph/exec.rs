@@ -10,6 +10,7 @@
 
 use super::op::Ctx;
 use super::{Graph, Kind, Value};
+use super::profile::{OpTime, Profiler};
 use crate::error::{Error, Result};
 use crate::gpu::{BufferPool, Gpu, Memo, Tensor};
 use crate::{ops, rng};
@@ -63,6 +64,9 @@ pub struct Executor {
     projector: Option<Tensor>,
     /// Whether runs reuse the memo's GPU objects (see [`Executor::reuse_gpu_objects`]).
     reuse: bool,
+    /// Per-op timestamps of the next runs (see [`Executor::profile`]) and the last run's times.
+    profiler: Option<Profiler>,
+    op_times: Vec<OpTime>,
     /// Provenance written into the metadata of saved weights and checkpoints (the trainer
     /// records the preset, images seen and training seconds), read back by `frontier`.
     pub notes: std::collections::HashMap<String, String>,
@@ -104,9 +108,27 @@ impl Executor {
             resize_convs: Vec::new(),
             projector: None,
             reuse: true,
+            profiler: None,
+            op_times: Vec::new(),
             notes: Default::default(),
             graph,
         })
+    }
+
+    /// Times every op of the following runs on the GPU (a timestamp after each, in the run's
+    /// own pass), readable after each run with [`Executor::op_times`]; `false` stops. An
+    /// error where the device has no timestamps inside passes.
+    pub fn profile(&mut self, gpu: &Gpu, on: bool) -> Result<()> {
+        // Every forward and backward step of every node, one Adam step, and ample room.
+        self.profiler = if on { Some(Profiler::new(gpu, 2 * self.graph.nodes.len() + 2)?) } else { None };
+        self.op_times.clear();
+        Ok(())
+    }
+
+    /// Each op's GPU time in the last profiled run, in schedule order (see
+    /// [`Executor::profile`]; [`super::profile::by_kind`] sums them per op kind).
+    pub fn op_times(&self) -> &[OpTime] {
+        &self.op_times
     }
 
     /// The graph being run.
@@ -299,6 +321,9 @@ impl Executor {
         let scratch_bytes = memo.bytes();
         self.memos[kind] = memo;
         let tensor_bytes = tensor_bytes?;
+        if let Some(p) = &self.profiler {
+            self.op_times = p.read(gpu)?;
+        }
         let mut step_loss = None;
         if adam.is_some() {
             step_loss = Some(self.check_guard(gpu)?);
@@ -332,10 +357,19 @@ impl Executor {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
+            if let Some(p) = &mut self.profiler {
+                p.begin(&mut pass);
+            }
             tensor_bytes = self.record(gpu, &mut pass, nodes, bw, loss, last, last_grad)?;
             if let Some(adam) = adam {
                 self.record_adam(gpu, &mut pass, adam)?;
+                if let Some(p) = &mut self.profiler {
+                    p.mark(&mut pass, "adam".into(), "adam");
+                }
             }
+        }
+        if let Some(p) = &self.profiler {
+            p.resolve(&mut enc);
         }
         if let (Some(_), Some((flags, staging)), Some(l)) = (adam, &self.guard, loss) {
             let fb = flags.buffer().size();
@@ -437,6 +471,9 @@ impl Executor {
                 n.op.forward(&mut ctx, &ins, &y).map_err(|e| node_err(&n.name, e))?;
             }
             crate::gpu::op_done();
+            if let Some(p) = &mut self.profiler {
+                p.mark(pass, format!("{} forward", n.name), n.op.name());
+            }
             self.values[n.output.0] = Some(y);
             for v in n.inputs.iter().chain([&n.output]) {
                 self.release_if_dead(*v, k, last);
@@ -503,6 +540,9 @@ impl Executor {
                 }
             }
             crate::gpu::op_done();
+            if let Some(p) = &mut self.profiler {
+                p.mark(pass, format!("{} backward", n.name), n.op.name());
+            }
             if last_grad[n.output.0] == pos && !self.grad_wanted[n.output.0] {
                 if let Some(t) = self.grads[n.output.0].take() {
                     self.pool.release(t);

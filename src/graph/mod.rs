@@ -8,9 +8,11 @@
 mod exec;
 mod op;
 pub mod params;
+pub mod profile;
 pub mod resize_conv;
 
 pub use exec::{Executor, StepStats};
+pub use profile::OpTime;
 pub use op::Op;
 pub use params::Init;
 

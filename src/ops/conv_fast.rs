@@ -247,7 +247,7 @@ fn pack_w(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: &Tensor, te
 
 /// The tiled forward with parameters `p` (of the dispatch geometry, output layout included)
 /// on packed operands: per invocation 8 outputs along W x 16 output channels (buffers), or
-/// per subgroup of 8 lanes 8 outputs along W x 4 rows x 16 output channels (textures).
+/// per subgroup of 8 lanes 8 outputs along W x 8 rows x 16 output channels (textures).
 fn forward_packed(
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
@@ -261,7 +261,7 @@ fn forward_packed(
     let bias = b.map_or(Arg::Absent, Arg::R);
     let args = [xp.arg(), wp.arg(), bias, Arg::W(y)];
     if let Packed::Texture(..) = xp {
-        let tiles = (p.n * p.co16 * p.od * p.oh.div_ceil(4) * p.ow.div_ceil(8)) as usize;
+        let tiles = (p.n * p.co16 * p.od * p.oh.div_ceil(8) * p.ow.div_ceil(8)) as usize;
         let p = Params { total: tiles as u32, ..p };
         return gpu.dispatch(pass, TEX_SHADER, "conv_fast_forward_tex", &p, &args, grid_1d(tiles as u64 * 8, 64)?);
     }

@@ -1,0 +1,103 @@
+//! Per-op GPU time of an executor run ([`Executor::profile`]): a timestamp after every op,
+//! written inside the run's one compute pass, so the times are those of the real schedule
+//! (same encoder, same scratch reuse), not of ops run one by one.
+//!
+//! [`Executor::profile`]: super::Executor::profile
+
+use crate::error::{Error, Result};
+use crate::gpu::Gpu;
+
+/// GPU time of one step of a profiled run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OpTime {
+    /// The node's name and what ran: `"enc3d.conv1 forward"`, `"enc3d.conv1 backward"`,
+    /// `"adam"`.
+    pub name: String,
+    /// The op's kind as [`super::Op`] names it (`"conv"`, `"prelu"`, ...; `"adam"`).
+    pub kind: String,
+    /// Nanoseconds between the timestamp before it and the one after it.
+    pub ns: f64,
+}
+
+/// The query set and buffers of one executor's profiled runs.
+pub(crate) struct Profiler {
+    set: wgpu::QuerySet,
+    cap: u32,
+    resolve: wgpu::Buffer,
+    staging: wgpu::Buffer,
+    /// (name, kind) of the op that ends at each timestamp after the first.
+    marks: Vec<(String, String)>,
+}
+
+/// wgpu's limit on the queries of one set.
+const MAX_QUERIES: u32 = wgpu::QUERY_SET_MAX_QUERIES;
+
+impl Profiler {
+    /// A profiler for runs of up to `ops` steps; an error where the device cannot write
+    /// timestamps inside a pass.
+    pub(crate) fn new(gpu: &Gpu, ops: usize) -> Result<Profiler> {
+        if !gpu.has_timestamps() {
+            return Err(Error::Invalid(format!("profiling needs timestamp queries inside compute passes, which {} lacks", gpu.info.name)));
+        }
+        let cap = u32::try_from(ops + 1).ok().filter(|&c| c <= MAX_QUERIES).ok_or_else(|| {
+            Error::Invalid(format!("profiling: {ops} steps is more than one query set holds ({})", MAX_QUERIES - 1))
+        })?;
+        let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("profile"), ty: wgpu::QueryType::Timestamp, count: cap });
+        let size = cap as u64 * 8;
+        let resolve = gpu.new_buffer("profile resolve", size, wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
+        let staging = gpu.new_buffer("profile readback", size, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+        Ok(Profiler { set, cap, resolve, staging, marks: Vec::new() })
+    }
+
+    /// The first timestamp of a run.
+    pub(crate) fn begin(&mut self, pass: &mut wgpu::ComputePass<'_>) {
+        self.marks.clear();
+        pass.write_timestamp(&self.set, 0);
+    }
+
+    /// A timestamp after the op just recorded; ops past the set's capacity are not timed.
+    pub(crate) fn mark(&mut self, pass: &mut wgpu::ComputePass<'_>, name: String, kind: &str) {
+        let i = self.marks.len() as u32 + 1;
+        if i < self.cap {
+            pass.write_timestamp(&self.set, i);
+            self.marks.push((name, kind.to_string()));
+        }
+    }
+
+    /// Copies the run's timestamps out, after its pass ended.
+    pub(crate) fn resolve(&self, enc: &mut wgpu::CommandEncoder) {
+        let n = self.marks.len() as u32 + 1;
+        enc.resolve_query_set(&self.set, 0..n, &self.resolve, 0);
+        enc.copy_buffer_to_buffer(&self.resolve, 0, &self.staging, 0, n as u64 * 8);
+    }
+
+    /// Each op's time, after the run's submit completed.
+    pub(crate) fn read(&self, gpu: &Gpu) -> Result<Vec<OpTime>> {
+        let words = crate::gpu::read_staging(gpu, &self.staging)?;
+        let bytes: &[u8] = bytemuck::cast_slice(&words);
+        let tick = |i: usize| bytemuck::pod_read_unaligned::<u64>(&bytes[i * 8..i * 8 + 8]);
+        let period = gpu.queue.get_timestamp_period() as f64;
+        Ok(self
+            .marks
+            .iter()
+            .enumerate()
+            .map(|(i, (name, kind))| OpTime { name: name.clone(), kind: kind.clone(), ns: tick(i + 1).saturating_sub(tick(i)) as f64 * period })
+            .collect())
+    }
+}
+
+/// `times` summed per kind, largest first, with each kind's number of steps.
+pub fn by_kind(times: &[OpTime]) -> Vec<(String, f64, usize)> {
+    let mut sums: Vec<(String, f64, usize)> = Vec::new();
+    for t in times {
+        match sums.iter_mut().find(|s| s.0 == t.kind) {
+            Some(s) => {
+                s.1 += t.ns;
+                s.2 += 1;
+            }
+            None => sums.push((t.kind.clone(), t.ns, 1)),
+        }
+    }
+    sums.sort_by(|a, b| b.1.total_cmp(&a.1));
+    sums
+}
