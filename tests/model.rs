@@ -188,7 +188,8 @@ fn grids_past_the_device_limits_run_or_fail_clearly() {
 /// light) renders through `render --shader ao --weights`, with the reference's AO beside it;
 /// without --weights `--shader ao` takes the shipped tiny AO weights (and claims no Phong
 /// score), and `eval` scores them, refusing a `--shader` the dataset does not hold. A shader
-/// with no shipped weights is refused by name, listing the shipped ones.
+/// with no shipped weights is refused by name, listing the shipped ones; the shipped toon
+/// weights render without --weights.
 #[test]
 fn weights_of_another_shader_render_with_its_head() {
     let dir = std::env::temp_dir().join(format!("rendernet-ao-test-{}", std::process::id()));
@@ -220,7 +221,12 @@ fn weights_of_another_shader_render_with_its_head() {
     assert!(!refused.status.success() && String::from_utf8_lossy(&refused.stderr).contains("--init"));
     let refused = Command::new(env!("CARGO_BIN_EXE_rendernet")).args(["render", "--shader", "contour", "--out", png.to_str().unwrap()]).output().unwrap();
     let err = String::from_utf8_lossy(&refused.stderr);
-    assert!(!refused.status.success() && err.contains("--shader contour") && err.contains("ao (tiny)") && err.contains("--weights"), "{err}");
+    assert!(!refused.status.success() && err.contains("--shader contour") && err.contains("ao (tiny)") && err.contains("toon (tiny)") && err.contains("--weights"), "{err}");
+    // Toon weights are shipped too: an RGB image head, no light input.
+    let out = rendernet(&["render", "--shader", "toon", "--size", "64", "--out", png.to_str().unwrap()]);
+    assert!(out.contains("embedded tiny-toon weights") && !out.contains("PSNR"), "{out}");
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert!(img.pixels().any(|p| p.0[0] > 128), "the toon render is black");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -21,6 +21,11 @@ pub const NANO_PHONG_WEIGHTS: &[u8] = include_bytes!("../../weights/nano-phong.s
 /// (weights/README.md).
 pub const TINY_AO_WEIGHTS: &[u8] = include_bytes!("../../weights/tiny-ao.safetensors");
 
+/// The tiny preset trained for toon shading (`--shader toon`), started from the Phong
+/// weights' trunk (weights/README.md). Soft: it draws the lit faces and the silhouette, not
+/// yet the crisp bands and lines.
+pub const TINY_TOON_WEIGHTS: &[u8] = include_bytes!("../../weights/tiny-toon.safetensors");
+
 /// A shipped Phong model and its measured accuracy, for picking one by quality.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShippedModel {
@@ -65,6 +70,7 @@ pub fn shipped_weights(preset: &Preset, shader: Shader) -> Option<&'static [u8]>
         ("tiny", Shader::Phong) => Some(TINY_PHONG_WEIGHTS),
         ("nano", Shader::Phong) => Some(NANO_PHONG_WEIGHTS),
         ("tiny", Shader::AmbientOcclusion) => Some(TINY_AO_WEIGHTS),
+        ("tiny", Shader::Toon) => Some(TINY_TOON_WEIGHTS),
         _ => None,
     }
 }
