@@ -420,6 +420,40 @@ fn ec_baselines_see_the_pose_and_learn() {
     }
 }
 
+/// A coloured network started from grey weights (`train --init`): the first conv's
+/// occupancy channel and the albedo head take the grey tensors (colour channels zero, albedo
+/// replicated into R, G and B), so on a white grid it renders exactly what the grey network
+/// renders.
+#[test]
+fn a_colour_network_widened_from_grey_weights_renders_as_the_grey_one() {
+    use rendernet::graph::Executor;
+    use rendernet::nn::camera::{input_values_with, light_values, pose_for_view};
+    let gpu = Gpu::new().unwrap();
+    let head = Head::Phong(phong_of(&Light::default()));
+    let grid = rendernet::voxel::bunny().resample_to(32).unwrap();
+    let view = View::default();
+    let image = |p: Preset| {
+        let net = RenderNet::build(&p, head, 1, [20, 24], false).unwrap();
+        let mut ex = Executor::new(&gpu, net.graph.clone(), 1).unwrap();
+        let r = ex.load_params_matching(&gpu, TINY_PHONG_WEIGHTS, "tiny-phong").unwrap();
+        ex.feed(&gpu, net.grid, &input_values_with(&grid, p.in_channels())).unwrap();
+        ex.feed(&gpu, net.pose, &pose_for_view(&view, p.input, p.cam, Some([22, 20, 20, 24]))).unwrap();
+        ex.feed(&gpu, net.light.unwrap(), &light_values(&Light::default())).unwrap();
+        ex.keep(net.image);
+        ex.forward(&gpu).unwrap();
+        (r, ex.read(&gpu, net.image).unwrap())
+    };
+    let (grey_report, grey) = image(Preset::tiny());
+    assert!(grey_report.widened.is_empty() && grey_report.fresh.is_empty(), "{grey_report:?}");
+    let (report, colour) = image(Preset::tiny().with_colour());
+    assert_eq!(report.widened, ["enc3d.conv1.weight", "head.albedo.weight", "head.albedo.bias"]);
+    assert!(report.fresh.is_empty(), "{report:?}");
+    assert!(grey.iter().any(|&v| v > 0.1), "the grey network drew nothing");
+    let worst = grey.iter().zip(&colour).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+    // Same sums in the same order (the grey input's padded channels were zero too).
+    assert!(worst <= 1e-5, "widened colour network differs from the grey one by {worst}");
+}
+
 /// Coloured voxels: a colour preset takes 4 input channels and predicts an RGB albedo, and
 /// the colour reaches it: trained on the same cube painted red and painted blue, the
 /// predicted albedo is redder for the red cube and bluer for the blue one. Weights with a

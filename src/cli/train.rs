@@ -129,9 +129,11 @@ pub fn run(a: TrainArgs) -> Result<()> {
             }
             bar.set_message(msg);
         }
-        Progress::Init { loaded, fresh } => {
+        Progress::Init { loaded, widened, fresh } => {
             let init = cfg.init.as_ref().map(|p| p.display().to_string()).unwrap_or_default();
-            let line = format!("started from {init}: {loaded} tensors taken, {} initialised fresh ({})", fresh.len(), fresh.join(", "));
+            let grown = if widened.is_empty() { String::new() } else { format!(", {} widened from grey ({})", widened.len(), widened.join(", ")) };
+            let fresh = if fresh.is_empty() { String::new() } else { format!(", {} initialised fresh ({})", fresh.len(), fresh.join(", ")) };
+            let line = format!("started from {init}: {loaded} tensors taken{grown}{fresh}");
             if bar.is_hidden() {
                 println!("{line}");
             } else {

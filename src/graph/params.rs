@@ -190,25 +190,33 @@ impl Executor {
     /// Starts from another model's weights where they fit: every parameter whose name and
     /// shape match a tensor of `bytes` takes its values (a checkpoint's Adam state is
     /// ignored); the rest keep their initialisation. For fine-tuning one trunk under new heads
-    /// (a Phong network's layers under a contour head). Returns the names loaded and the
-    /// names left as initialised; an error when nothing matches (another preset's weights).
-    pub fn load_params_matching(&mut self, gpu: &Gpu, bytes: &[u8], name: &str) -> Result<(Vec<String>, Vec<String>)> {
+    /// (a Phong network's layers under a contour head). A grey model's tensors also seed a
+    /// coloured model's wider ones (see [`widen`]), so a colour network starts out rendering
+    /// exactly what the grey one did. An error when nothing matches (another preset's weights).
+    pub fn load_params_matching(&mut self, gpu: &Gpu, bytes: &[u8], name: &str) -> Result<InitReport> {
         let (file, _, _) = decode(bytes, name)?;
-        let (mut loaded, mut fresh) = (Vec::new(), Vec::new());
+        let mut r = InitReport::default();
         for v in self.graph().params() {
             let info = self.graph().info(v).clone();
-            match file.get(&info.name) {
-                Some((shape, vals)) if !is_adam_state(&info.name) && *shape == info.shape => {
+            match file.get(&info.name).filter(|_| !is_adam_state(&info.name)) {
+                Some((shape, vals)) if *shape == info.shape => {
                     self.feed(gpu, v, vals)?;
-                    loaded.push(info.name);
+                    r.loaded.push(info.name);
                 }
-                _ => fresh.push(info.name),
+                Some((shape, vals)) => match widen(shape, vals, &info.shape) {
+                    Some(w) => {
+                        self.feed(gpu, v, &w)?;
+                        r.widened.push(info.name);
+                    }
+                    None => r.fresh.push(info.name),
+                },
+                None => r.fresh.push(info.name),
             }
         }
-        if loaded.is_empty() {
+        if r.loaded.is_empty() && r.widened.is_empty() {
             return Err(Error::Invalid(format!("{name}: no tensor matches the model's parameters by name and shape (another preset's weights?)")));
         }
-        Ok((loaded, fresh))
+        Ok(r)
     }
 
     /// Feeds every parameter from `file`, which must hold exactly the parameters (a name in
@@ -298,5 +306,62 @@ impl Executor {
         self.step = step;
         self.seed = seed;
         Ok(())
+    }
+}
+
+/// What [`Executor::load_params_matching`] did with each parameter.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct InitReport {
+    /// Taken as they were (same name and shape).
+    pub loaded: Vec<String>,
+    /// Taken from a grey model's narrower tensor of the same name (see [`widen`]).
+    pub widened: Vec<String>,
+    /// Left as initialised (absent, or a shape no rule maps).
+    pub fresh: Vec<String>,
+}
+
+/// `vals` of shape `from` grown to `to` where a grey model's tensor maps onto a coloured
+/// model's: one input channel to several along axis 1 (`[O, 1, k..] -> [O, C, k..]`: the
+/// first channel, occupancy in both models, keeps the weights, the colour channels start at
+/// zero), or one output channel to several along axis 0 (`[1, ..] -> [C, ..]`, biases
+/// included: replicated, so a grey albedo becomes the same value in R, G and B). `None` for
+/// any other difference.
+pub fn widen(from: &[usize], vals: &[f32], to: &[usize]) -> Option<Vec<f32>> {
+    if from.len() != to.len() || from.is_empty() || vals.len() != from.iter().product::<usize>() {
+        return None;
+    }
+    let differs: Vec<usize> = (0..from.len()).filter(|&a| from[a] != to[a]).collect();
+    match differs[..] {
+        [0] if from[0] == 1 => Some(vals.repeat(to[0])),
+        [1] if from[1] == 1 => {
+            let inner: usize = from[2..].iter().product();
+            let mut out = vec![0.0; to.iter().product()];
+            for o in 0..from[0] {
+                let dst = o * to[1] * inner;
+                out[dst..dst + inner].copy_from_slice(&vals[o * inner..(o + 1) * inner]);
+            }
+            Some(out)
+        }
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod widen_tests {
+    use super::widen;
+
+    #[test]
+    fn grey_tensors_widen_to_colour_ones() {
+        // [O=2, I=1, k=3] -> [2, 3, 3]: channel 0 keeps the weights, the others are zero.
+        let w = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
+        let got = widen(&[2, 1, 3], &w, &[2, 3, 3]).unwrap();
+        assert_eq!(got, [1.0, 2.0, 3.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 4.0, 5.0, 6.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        // [1, I=2, k=1] -> [3, 2, 1]: replicated per output channel; a bias [1] -> [3].
+        assert_eq!(widen(&[1, 2, 1], &[7.0, 8.0], &[3, 2, 1]).unwrap(), [7.0, 8.0, 7.0, 8.0, 7.0, 8.0]);
+        assert_eq!(widen(&[1], &[0.5], &[3]).unwrap(), [0.5, 0.5, 0.5]);
+        // Anything else is not a grey -> colour map.
+        assert_eq!(widen(&[2, 2, 3], &[0.0; 12], &[2, 4, 3]), None);
+        assert_eq!(widen(&[1, 1, 3], &[0.0; 3], &[2, 2, 3]), None);
+        assert_eq!(widen(&[2, 1], &[0.0; 2], &[2, 1, 1]), None);
     }
 }

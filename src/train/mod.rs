@@ -104,7 +104,7 @@ pub enum Progress {
     Eval { step: u64, psnr: f32, checkpoint: PathBuf },
     /// A fresh run started from `--init` weights: the parameters taken from them, and those
     /// left as initialised (new heads, reshaped layers).
-    Init { loaded: usize, fresh: Vec<String> },
+    Init { loaded: usize, widened: Vec<String>, fresh: Vec<String> },
 }
 
 /// The camera-grid window side at `step`: the paper's patch schedule, growing from 1/8 to
@@ -131,8 +131,8 @@ struct CropPhase {
     window: usize,
     net: RenderNet,
     ex: Executor,
-    /// What `cfg.init` filled (loaded, fresh), on a fresh run's first phase.
-    init: Option<(Vec<String>, Vec<String>)>,
+    /// What `cfg.init` filled, on a fresh run's first phase.
+    init: Option<crate::graph::params::InitReport>,
 }
 
 fn crop_phase(gpu: &Gpu, cfg: &TrainConfig, head: Head, window: usize, from: Option<&std::path::Path>) -> Result<CropPhase> {
@@ -210,8 +210,8 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
         }
     }
     let mut cur = crop_phase(gpu, cfg, head, window(start), resume)?;
-    if let Some((loaded, fresh)) = cur.init.take() {
-        report(Progress::Init { loaded: loaded.len(), fresh });
+    if let Some(r) = cur.init.take() {
+        report(Progress::Init { loaded: r.loaded.len(), widened: r.widened, fresh: r.fresh });
     }
     let names: Vec<String> = cur.net.targets.iter().map(|(n, _)| n.clone()).collect();
     // The curve lives in <out>.log.csv (step,loss,psnr), appended every evaluation and read
