@@ -39,6 +39,9 @@ enum Cmd {
     Curve(cli::train::CurveArgs),
     /// Train the 3D shape autoencoder used as a shape prior by inverse rendering.
     TrainPrior(cli::prior::TrainPriorArgs),
+    /// Train the texture decoder (a code of 9 numbers -> an RGB grid over the object cube) on
+    /// the procedural paints of `dataset --colour`, for recovering texture by inverse rendering.
+    TrainTexture(cli::prior::TrainTextureArgs),
     /// Recover held-out shapes through the shape prior (pose and light known) and report
     /// their voxel IoU beside the prior's starting shape's.
     EvalShape(cli::shape::EvalShapeArgs),
@@ -87,6 +90,7 @@ fn main() -> ExitCode {
         Cmd::Eval(a) => cli::eval::run(a),
         Cmd::Curve(a) => cli::train::run_curve(a),
         Cmd::TrainPrior(a) => cli::prior::run(a),
+        Cmd::TrainTexture(a) => cli::prior::run_texture(a),
         Cmd::EvalShape(a) => cli::shape::run(a),
         Cmd::Bench(a) => cli::bench::run(a),
         Cmd::Invert(a) => cli::invert::run(a),

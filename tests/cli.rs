@@ -481,3 +481,23 @@ fn train_prior_trains_resumes_and_reports_iou() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `train-texture`: no dataset (the paints are procedural); it reports the held-out texture
+/// PSNR, refuses to overwrite, and resumes.
+#[test]
+fn train_texture_trains_resumes_and_reports_psnr() {
+    let dir = std::env::temp_dir().join(format!("rendernet-cli-texture-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let ckpt = dir.join("texture.ckpt");
+    let c = ckpt.to_str().unwrap();
+    let common = ["--out", c, "--batch", "2", "--eval-every", "2", "--eval-samples", "2"];
+    let out = run_ok(&[&["train-texture", "--steps", "2"][..], &common[..]].concat());
+    let psnr: f64 = out.lines().find_map(|l| l.strip_prefix("final held-out texture PSNR ")).and_then(|r| r.split(';').next()).unwrap_or_else(|| panic!("{out}")).parse().unwrap();
+    assert!(psnr.is_finite() && psnr > 3.0, "{out}");
+    let again = rendernet().args([&["train-texture", "--steps", "2"][..], &common[..]].concat()).output().unwrap();
+    assert!(!again.status.success() && String::from_utf8_lossy(&again.stderr).contains("--resume"));
+    let out = run_ok(&[&["train-texture", "--steps", "4", "--resume", c][..], &common[..]].concat());
+    assert!(out.contains("step 4/4"), "{out}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -110,28 +110,76 @@ fn shape_code_gradient_matches_finite_differences() {
     ex.feed(&gpu, net.light.unwrap(), &light_values(&Light::default())).unwrap();
     ex.feed(&gpu, target, &vec![0.3; 3 * h * w]).unwrap();
     let z: Vec<f32> = (0..pp.latent).map(|i| 0.3 + 0.4 * ((i * 37 % 64) as f32 / 64.0)).collect();
-    let loss_at = |ex: &mut Executor, z: &[f32]| {
-        ex.feed(&gpu, code, z).unwrap();
-        ex.forward(&gpu).unwrap();
-        ex.read(&gpu, loss).unwrap()[0] as f64
+    assert_code_gradient(&gpu, &mut ex, code, loss, &z, 0.1);
+}
+
+/// The analytic gradient of `loss` with respect to the input `code` at `z` against central
+/// finite differences of step `step`. Single code entries move an f32 loss by less than its
+/// rounding; directional derivatives gather them all: along the gradient itself (its norm)
+/// and along a fixed mixed-sign direction (the dot product with the gradient).
+fn assert_code_gradient(gpu: &Gpu, ex: &mut rendernet::graph::Executor, code: rendernet::graph::Value, loss: rendernet::graph::Value, z: &[f32], step: f64) {
+    let loss_at = |ex: &mut rendernet::graph::Executor, z: &[f32]| {
+        ex.feed(gpu, code, z).unwrap();
+        ex.forward(gpu).unwrap();
+        ex.read(gpu, loss).unwrap()[0] as f64
     };
-    ex.feed(&gpu, code, &z).unwrap();
-    ex.backward(&gpu, loss).unwrap();
-    let g: Vec<f64> = ex.grad(&gpu, code).unwrap().iter().map(|&v| v as f64).collect();
-    // Single code entries move an f32 loss by less than its rounding; directional
-    // derivatives gather all 64: along the gradient itself (its norm) and along a fixed
-    // mixed-sign direction (the dot product with the gradient).
+    ex.feed(gpu, code, z).unwrap();
+    ex.backward(gpu, loss).unwrap();
+    let g: Vec<f64> = ex.grad(gpu, code).unwrap().iter().map(|&v| v as f64).collect();
     let norm = g.iter().map(|v| v * v).sum::<f64>().sqrt();
-    let mixed: Vec<f64> = (0..pp.latent).map(|i| if i % 3 == 0 { 1.0 } else { -0.5 } / (pp.latent as f64).sqrt()).collect();
-    let step = 0.1;
+    let mixed: Vec<f64> = (0..z.len()).map(|i| if i % 3 == 0 { 1.0 } else { -0.5 } / (z.len() as f64).sqrt()).collect();
     for (name, dir) in [("gradient direction", g.iter().map(|v| v / norm).collect::<Vec<_>>()), ("mixed direction", mixed)] {
         let at = |s: f64| z.iter().zip(&dir).map(|(&a, d)| (a as f64 + s * d) as f32).collect::<Vec<f32>>();
-        let fd = (loss_at(&mut ex, &at(step)) - loss_at(&mut ex, &at(-step))) / (2.0 * step);
+        let fd = (loss_at(ex, &at(step)) - loss_at(ex, &at(-step))) / (2.0 * step);
         let analytic: f64 = g.iter().zip(&dir).map(|(a, d)| a * d).sum();
         eprintln!("{name}: analytic {analytic:.3e}, finite difference {fd:.3e}");
         assert!(fd.abs() > 1e-7, "{name}: the loss does not move ({fd:e}); the test would prove nothing");
         assert!((analytic - fd).abs() <= 0.1 * fd.abs(), "{name}: analytic {analytic} vs finite difference {fd}");
     }
+}
+
+/// The texture decoder in front of a coloured RenderNet (decoded RGB times the occupancy,
+/// beside the occupancy): the image loss's gradient with respect to the texture code matches
+/// finite differences. The renderer is the shipped grey network widened to colour, with
+/// random weights on the colour channels so the texture reaches the image.
+#[test]
+fn texture_code_gradient_matches_finite_differences() {
+    use rendernet::graph::{Executor, Op};
+    use rendernet::nn::camera::{input_values, light_values, pose_for_view};
+    use rendernet::nn::rendernet::{Head, phong_of};
+    use rendernet::nn::texture::{TexturePreset, decoder_with_renderer};
+    use rendernet::ops::loss::Loss;
+    use rendernet::voxel::shapes::TEXTURE_CODE;
+    let gpu = Gpu::new().unwrap();
+    let (tp, rp) = (TexturePreset::small(), Preset::tiny().with_colour());
+    assert!(decoder_with_renderer(&tp, &Preset::tiny(), Head::Phong(phong_of(&Light::default())), 1, [32, 32]).is_err(), "a grey renderer has no colour to take");
+    let (mut net, code, occupancy) = decoder_with_renderer(&tp, &rp, Head::Phong(phong_of(&Light::default())), 1, [32, 32]).unwrap();
+    let [h, w] = [net.graph.info(net.image).shape[2], net.graph.info(net.image).shape[3]];
+    let target = net.graph.input("target", &[1, 3, h, w]).unwrap();
+    let loss = net.graph.apply("loss", Op::Loss(Loss::Mse), &[net.image, target]).unwrap();
+    let mut ex = Executor::new(&gpu, net.graph.clone(), 3).unwrap();
+    let r = ex.load_params_matching(&gpu, TINY_PHONG_WEIGHTS, "tiny").unwrap();
+    assert!(r.fresh.iter().all(|n| n.starts_with("tex.")) && r.widened.contains(&"enc3d.conv1.weight".to_string()), "{r:?}");
+    let conv1 = net.graph.value("enc3d.conv1.weight").unwrap();
+    let mut wts = ex.read(&gpu, conv1).unwrap();
+    let taps = wts.len() / (rp.c3[0] * 4);
+    for (i, v) in wts.iter_mut().enumerate() {
+        if (i / taps) % 4 != 0 {
+            *v = 0.3 * (((i * 7919) % 13) as f32 / 6.0 - 1.0);
+        }
+    }
+    ex.feed(&gpu, conv1, &wts).unwrap();
+    ex.freeze_params();
+    ex.want_grad(code);
+    ex.keep(loss);
+    ex.training = false;
+    let view = View { azimuth: 30.0, elevation: 70.0, radius: 3.3 };
+    ex.feed(&gpu, occupancy, &input_values(&voxel::bunny().resample_to(tp.res).unwrap())).unwrap();
+    ex.feed(&gpu, net.pose, &pose_for_view(&view, rp.input, rp.cam, Some([16, 16, 32, 32]))).unwrap();
+    ex.feed(&gpu, net.light.unwrap(), &light_values(&Light::default())).unwrap();
+    ex.feed(&gpu, target, &vec![0.3; 3 * h * w]).unwrap();
+    let z: Vec<f32> = (0..TEXTURE_CODE).map(|i| 0.2 + 0.6 * ((i * 5 % 9) as f32 / 9.0)).collect();
+    assert_code_gradient(&gpu, &mut ex, code, loss, &z, 0.2);
 }
 
 /// The code search runs end to end on a shipped RenderNet and a (seeded, untrained) prior:

@@ -12,3 +12,4 @@ pub mod projection;
 pub mod resample;
 pub mod resize_conv;
 pub mod concat;
+pub mod mul;

@@ -1,18 +1,19 @@
-//! `rendernet train-prior`: the 3D shape autoencoder used as a shape prior, with a progress
-//! bar, checkpoints and held-out IoU.
+//! `rendernet train-prior` (the 3D shape autoencoder used as a shape prior) and
+//! `rendernet train-texture` (the texture decoder), with a progress bar, checkpoints and a
+//! held-out score.
 
 use clap::Args;
 use rendernet::nn::prior::PriorPreset;
+use rendernet::nn::texture::TexturePreset;
 use rendernet::train::prior::{PriorConfig, train_prior};
+use rendernet::train::steps::StepConfig;
+use rendernet::train::texture::{TextureConfig, train_texture};
 use rendernet::{Gpu, Result};
 use std::path::PathBuf;
 
-/// Train the shape prior on a dataset's grids.
+/// The options both grid networks' training takes.
 #[derive(Args)]
-pub struct TrainPriorArgs {
-    /// Dataset directory from `rendernet dataset` (grid side a multiple of 16, e.g. `--res 32`).
-    #[arg(long)]
-    data: PathBuf,
+pub struct StepArgs {
     /// Checkpoint to write (atomically); <out>.weights.safetensors is written beside it.
     /// An existing <out> is only replaced with --resume or --force.
     #[arg(long)]
@@ -26,7 +27,7 @@ pub struct TrainPriorArgs {
     /// Resume from this checkpoint.
     #[arg(long)]
     resume: Option<PathBuf>,
-    /// Grids per step.
+    /// Samples per step.
     #[arg(long, default_value_t = 8)]
     batch: usize,
     /// Learning rate (Adam, beta1 0.5).
@@ -38,44 +39,77 @@ pub struct TrainPriorArgs {
     /// Steps between held-out evaluations (each also writes the checkpoint).
     #[arg(long, default_value_t = 500)]
     eval_every: u64,
-    /// Held-out grids per evaluation (0 = all).
+    /// Held-out samples per evaluation (0 = all the dataset's, for the prior).
     #[arg(long, default_value_t = 100)]
     eval_samples: usize,
 }
 
-/// Runs prior training with a progress bar (a line per 100 steps without a terminal).
-pub fn run(a: TrainPriorArgs) -> Result<()> {
-    super::train::refuse_overwrite(&a.out, a.resume.is_some(), a.force)?;
-    let cfg = PriorConfig {
-        preset: PriorPreset::small(),
-        data: a.data,
-        out: a.out,
-        steps: a.steps,
-        resume: a.resume,
-        batch: a.batch.max(1),
-        lr: a.lr,
-        seed: a.seed,
-        eval_every: a.eval_every.max(1),
-        eval_samples: a.eval_samples,
-    };
-    let gpu = Gpu::new()?;
-    let bar = super::train::step_bar(cfg.steps);
+/// Train the shape prior on a dataset's grids.
+#[derive(Args)]
+pub struct TrainPriorArgs {
+    /// Dataset directory from `rendernet dataset` (grid side a multiple of 16, e.g. `--res 32`).
+    #[arg(long)]
+    data: PathBuf,
+    #[command(flatten)]
+    s: StepArgs,
+}
+
+/// Train the texture decoder on the procedural paints of `dataset --colour`.
+#[derive(Args)]
+pub struct TrainTextureArgs {
+    #[command(flatten)]
+    s: StepArgs,
+}
+
+/// Runs `train` with a progress bar (a line per 100 steps without a terminal), showing the
+/// held-out score as `what`; prints the final score.
+fn with_bar(s: &StepArgs, what: &str, train: impl FnOnce(&mut dyn FnMut(u64, f32, Option<f64>)) -> Result<f64>) -> Result<()> {
+    super::train::refuse_overwrite(&s.out, s.resume.is_some(), s.force)?;
+    let bar = super::train::step_bar(s.steps);
     let mut ema = None::<f32>;
     let mut last = String::from("-");
-    let iou = train_prior(&gpu, &cfg, |step, loss, iou| {
+    let score = train(&mut |step, loss, score| {
         let e = ema.map_or(loss, |e| 0.98 * e + 0.02 * loss);
         ema = Some(e);
-        if let Some(i) = iou {
-            last = format!("{i:.3}");
+        if let Some(v) = score {
+            last = format!("{v:.3}");
         }
-        let msg = format!("loss {e:.4} held-out IoU {last}");
+        let msg = format!("loss {e:.4} {what} {last}");
         bar.set_position(step);
-        if bar.is_hidden() && (step % 100 == 0 || iou.is_some()) {
-            println!("step {step}/{}: {msg}", cfg.steps);
+        if bar.is_hidden() && (step % 100 == 0 || score.is_some()) {
+            println!("step {step}/{}: {msg}", s.steps);
         }
         bar.set_message(msg);
     })?;
     bar.finish();
-    println!("final held-out IoU {iou:.3}; weights in {}", cfg.out.with_extension("weights.safetensors").display());
+    println!("final {what} {score:.3}; weights in {}", s.out.with_extension("weights.safetensors").display());
     Ok(())
+}
+
+/// The library's view of the shared options.
+fn step_config(s: &StepArgs) -> StepConfig {
+    StepConfig {
+        out: s.out.clone(),
+        steps: s.steps,
+        resume: s.resume.clone(),
+        batch: s.batch.max(1),
+        lr: s.lr,
+        seed: s.seed,
+        eval_every: s.eval_every.max(1),
+        eval_samples: s.eval_samples,
+    }
+}
+
+/// Runs prior training.
+pub fn run(a: TrainPriorArgs) -> Result<()> {
+    let cfg = PriorConfig { preset: PriorPreset::small(), data: a.data.clone(), steps: step_config(&a.s) };
+    with_bar(&a.s, "held-out IoU", |report| train_prior(&Gpu::new()?, &cfg, report))
+}
+
+/// Runs texture decoder training.
+pub fn run_texture(a: TrainTextureArgs) -> Result<()> {
+    let mut steps = step_config(&a.s);
+    steps.eval_samples = steps.eval_samples.max(1);
+    let cfg = TextureConfig { preset: TexturePreset::small(), steps };
+    with_bar(&a.s, "held-out texture PSNR", |report| train_texture(&Gpu::new()?, &cfg, report))
 }

@@ -16,6 +16,7 @@
 //! | `Loss` | prediction, target (no gradient) | both |
 //! | `Concat` | a[N,C1,S..], b[N,C2,S..] | nothing |
 //! | `Reshape(shape)` | x (same size as `shape`) | nothing |
+//! | `Mul` | x[N,C,S..], m[N,1|C,S..] | both |
 
 use crate::error::{Result, shape_err};
 use crate::gpu::{Gpu, Tensor};
@@ -54,6 +55,9 @@ pub enum Op {
     /// The same values in another shape of the same size (row-major order kept): from a
     /// conv's `[N, C, D, H, W]` to a fully-connected layer's `[N, K, 1, 1]` and back.
     Reshape(Vec<usize>),
+    /// Elementwise product, the second input broadcast over channels when it has one
+    /// (a texture times the occupancy it paints).
+    Mul,
 }
 
 /// What a node's forward or backward gets to work with.
@@ -83,13 +87,14 @@ impl Op {
             Op::Loss(Loss::Bce) => "bce",
             Op::Concat => "concat",
             Op::Reshape(_) => "reshape",
+            Op::Mul => "mul",
         }
     }
 
     fn arity(&self) -> usize {
         match self {
             Op::Sigmoid | Op::Elu(_) | Op::Dropout(_) | Op::Reshape(_) => 1,
-            Op::Prelu | Op::Add | Op::Loss(_) | Op::Resample(_) | Op::Concat => 2,
+            Op::Prelu | Op::Add | Op::Loss(_) | Op::Resample(_) | Op::Concat | Op::Mul => 2,
             Op::Projection | Op::Conv(_) | Op::ConvTranspose(_) => 3,
             Op::Phong(_) => 4,
         }
@@ -145,6 +150,7 @@ impl Op {
                 Ok(vec![1])
             }
             Op::Concat => ops::concat::output_shape(s),
+            Op::Mul => ops::mul::output_shape(s[0], s[1]),
             Op::Reshape(to) => {
                 if to.iter().product::<usize>() != s[0].iter().product::<usize>() || to.contains(&0) {
                     return Err(shape_err("reshape", format!("{:?} cannot become {to:?}: the sizes differ", s[0])));
@@ -182,7 +188,7 @@ impl Op {
             Op::Projection => (&[0, 1], false),
             Op::Resample(_) | Op::Conv(_) | Op::ConvTranspose(_) => (&[0, 1], false),
             Op::Phong(_) => (&[0, 1, 2, 3], false),
-            Op::Loss(_) => (&[0, 1], false),
+            Op::Loss(_) | Op::Mul => (&[0, 1], false),
         }
     }
 
@@ -210,6 +216,7 @@ impl Op {
             Op::Loss(l) => l.forward(g, p, x[0], x[1], y),
             Op::Concat => ops::concat::forward(g, p, x, y),
             Op::Reshape(_) => ops::add::reshape(g, p, x[0], y),
+            Op::Mul => ops::mul::forward(g, p, x[0], x[1], y),
         }
     }
 
@@ -278,6 +285,10 @@ impl Op {
                 ops::concat::backward(g, p, dy, &[&shapes[0], &shapes[1]], dx)
             }
             Op::Reshape(_) => some(dx[0], |d| ops::add::reshape(g, p, dy, d)),
+            Op::Mul => {
+                some(dx[0], |d| ops::mul::backward_x(g, p, dy, x[1], d))?;
+                some(dx[1], |d| ops::mul::backward_mask(g, p, x[0], dy, d))
+            }
         }
     }
 }

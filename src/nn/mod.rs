@@ -4,5 +4,6 @@
 pub mod camera;
 pub mod ec;
 pub mod prior;
+pub mod texture;
 pub mod render;
 pub mod rendernet;

@@ -78,17 +78,26 @@ impl ShapePrior {
 /// The decoder on `code` (`[N, L, 1, 1]`, in 0..1): occupancy probabilities `[N, 1, R, R, R]`
 /// in RenderNet's input layout. Its parameters are named `dec.*`.
 pub(crate) fn decoder(b: &mut Builder, p: &PriorPreset, code: Value) -> Result<Value> {
+    grid_decoder(b, "dec", p.res, p.dec, 1, code, "recon")
+}
+
+/// A code `[N, L, 1, 1]` decoded into a grid `[N, out, res, res, res]` with values in 0..1
+/// (the appendix's decoder: a fully-connected layer to a `res / 8` grid of `dec[0]` channels,
+/// three stride-2 3D transposed convs of `dec[1..]` channels, a 3^3 conv to `out` channels,
+/// ELU between layers and a sigmoid at the end). Parameters are named `{prefix}.*`; the
+/// output value is named `output`. Shared by the shape prior and the texture decoder.
+pub(crate) fn grid_decoder(b: &mut Builder, prefix: &str, res: usize, dec: [usize; 4], out: usize, code: Value, output: &str) -> Result<Value> {
     let n = b.g.info(code).shape[0];
-    let s = p.res / 8;
-    let mut x = b.dense("dec.fc", code, p.dec[0] * s * s * s)?;
-    x = b.g.apply("dec.fc.act", Op::Elu(1.0), &[x])?;
-    x = b.g.apply("dec.grid", Op::Reshape(vec![n, p.dec[0], s, s, s]), &[x])?;
-    for (i, &c) in p.dec[1..].iter().enumerate() {
-        x = b.conv_transpose(&format!("dec.up{i}"), x, c, ConvTranspose::conv3d([4; 3], [2; 3], Padding::Same))?;
-        x = b.g.apply(&format!("dec.act{i}"), Op::Elu(1.0), &[x])?;
+    let s = res / 8;
+    let mut x = b.dense(&format!("{prefix}.fc"), code, dec[0] * s * s * s)?;
+    x = b.g.apply(&format!("{prefix}.fc.act"), Op::Elu(1.0), &[x])?;
+    x = b.g.apply(&format!("{prefix}.grid"), Op::Reshape(vec![n, dec[0], s, s, s]), &[x])?;
+    for (i, &c) in dec[1..].iter().enumerate() {
+        x = b.conv_transpose(&format!("{prefix}.up{i}"), x, c, ConvTranspose::conv3d([4; 3], [2; 3], Padding::Same))?;
+        x = b.g.apply(&format!("{prefix}.act{i}"), Op::Elu(1.0), &[x])?;
     }
-    x = b.conv("dec.out", x, 1, Conv::conv3d([3; 3], [1; 3], Padding::Same))?;
-    b.g.apply("recon", Op::Sigmoid, &[x])
+    x = b.conv(&format!("{prefix}.out"), x, out, Conv::conv3d([3; 3], [1; 3], Padding::Same))?;
+    b.g.apply(output, Op::Sigmoid, &[x])
 }
 
 /// The prior's decoder in front of RenderNet: a latent code input `code` `[N, L, 1, 1]`

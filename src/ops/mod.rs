@@ -16,6 +16,7 @@ pub mod dropout;
 pub mod elu;
 pub mod finite;
 pub mod loss;
+pub mod mul;
 pub mod phong;
 pub mod prelu;
 pub mod projection;

@@ -6,6 +6,8 @@ pub mod eval;
 pub mod lr;
 pub mod plot;
 pub mod prior;
+pub mod steps;
+pub mod texture;
 
 use crate::data::{Dataset, Split};
 use crate::error::{Error, Result};

@@ -8,8 +8,8 @@ use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::graph::Executor;
 use crate::nn::prior::{PriorPreset, ShapePrior, iou};
-use crate::ops::adam::Adam;
 use crate::rng::SplitMix64;
+use super::steps::{self, StepConfig};
 use std::path::PathBuf;
 
 /// How to train the prior.
@@ -19,22 +19,8 @@ pub struct PriorConfig {
     pub preset: PriorPreset,
     /// Dataset directory (its grids are used; images are not).
     pub data: PathBuf,
-    /// Checkpoint path; `<out>.weights.safetensors` is written beside it.
-    pub out: PathBuf,
-    /// Total optimizer steps.
-    pub steps: u64,
-    /// Checkpoint to resume from.
-    pub resume: Option<PathBuf>,
-    /// Grids per step.
-    pub batch: usize,
-    /// Learning rate (Adam, beta1 0.5).
-    pub lr: f32,
-    /// Seed for initialisation and sampling.
-    pub seed: u64,
-    /// Steps between evaluations + checkpoints.
-    pub eval_every: u64,
-    /// Held-out grids per evaluation (0 = all).
-    pub eval_samples: usize,
+    /// Steps, batch, checkpoints and evaluations (`eval_samples` 0: the whole test split).
+    pub steps: StepConfig,
 }
 
 /// The grid of sample `i` of `split` as the prior reads it: in RenderNet's input layout
@@ -73,7 +59,7 @@ pub fn evaluate(gpu: &Gpu, p: &PriorPreset, weights: &[u8], ds: &Dataset, sample
 
 /// Trains as configured; `report(step, loss, iou)` after every step (`iou` at evaluations).
 /// Returns the last held-out IoU.
-pub fn train_prior(gpu: &Gpu, cfg: &PriorConfig, mut report: impl FnMut(u64, f32, Option<f64>)) -> Result<f64> {
+pub fn train_prior(gpu: &Gpu, cfg: &PriorConfig, report: impl FnMut(u64, f32, Option<f64>)) -> Result<f64> {
     let ds = Dataset::open(&cfg.data)?;
     let train = ds.split(Split::Train);
     if train.is_empty() {
@@ -81,38 +67,19 @@ pub fn train_prior(gpu: &Gpu, cfg: &PriorConfig, mut report: impl FnMut(u64, f32
     }
     // The grid side is the dataset's.
     let preset = PriorPreset { res: ds.manifest.res, ..cfg.preset.clone() };
-    let net = ShapePrior::build(&preset, cfg.batch, true)?;
+    let s = &cfg.steps;
+    let net = ShapePrior::build(&preset, s.batch, true)?;
     let loss = net.loss.expect("built with a loss");
-    let mut ex = Executor::new(gpu, net.graph.clone(), cfg.seed)?;
-    let mut start = 0;
-    if let Some(r) = &cfg.resume {
-        ex.load_checkpoint(gpu, r)?;
-        start = ex.step;
-    }
-    let mut last = f64::NAN;
-    for step in start..cfg.steps {
+    let mut ex = Executor::new(gpu, net.graph.clone(), s.seed)?;
+    let feed = |ex: &mut Executor, step: u64| {
         // The samples of a step depend on (seed, step) only: a resumed run repeats them.
-        let mut rng = SplitMix64::new(cfg.seed ^ 0x9_1102, step);
-        let mut grids = Vec::with_capacity(cfg.batch * cfg.preset.res.pow(3));
-        for _ in 0..cfg.batch {
+        let mut rng = SplitMix64::new(s.seed ^ 0x9_1102, step);
+        let mut grids = Vec::with_capacity(s.batch * preset.res.pow(3));
+        for _ in 0..s.batch {
             let i = (rng.next_u64() % train.len() as u64) as usize;
             grids.extend(grid_of(&ds, Split::Train, i, preset.res)?);
         }
-        ex.feed(gpu, net.grid, &grids)?;
-        let stats = ex.train_step(gpu, loss, &Adam::new(cfg.lr))?;
-        let l = stats.loss.expect("a training step reads its loss back");
-        if !l.is_finite() {
-            return Err(Error::Invalid(format!("step {}: the loss is {l}; stopping (last checkpoint: {})", step + 1, cfg.out.display())));
-        }
-        let eval = (step + 1) % cfg.eval_every == 0 || step + 1 == cfg.steps;
-        if eval {
-            ex.save_checkpoint(gpu, &cfg.out)?;
-            let weights = cfg.out.with_extension("weights.safetensors");
-            ex.save_params(gpu, &weights)?;
-            let bytes = std::fs::read(&weights).map_err(|e| Error::Io { path: weights.display().to_string(), source: e })?;
-            last = evaluate(gpu, &preset, &bytes, &ds, cfg.eval_samples)?;
-        }
-        report(step + 1, l, eval.then_some(last));
-    }
-    Ok(last)
+        ex.feed(gpu, net.grid, &grids)
+    };
+    steps::run(gpu, &mut ex, loss, s, feed, |w| evaluate(gpu, &preset, w, &ds, s.eval_samples), report)
 }

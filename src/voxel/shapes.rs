@@ -11,7 +11,7 @@ mod families;
 mod paint;
 
 pub use families::{chair, primitive, sofa, table};
-pub use paint::{Paint, Pattern};
+pub use paint::{Paint, Pattern, TEXTURE_CODE};
 
 use super::{Mesh, VoxelError, VoxelGrid, check_dims};
 use glam::{Mat3, Vec3};
