@@ -10,7 +10,9 @@ fn main() {
     let gpu = Gpu::new().unwrap();
     let ds = Dataset::open(data).unwrap();
     let bytes = std::fs::read(weights).unwrap();
-    let mut r = Renderer::new(&gpu, Preset::tiny(), &bytes, weights, 128).unwrap();
+    let c3: Vec<usize> = std::env::var("C3").unwrap_or("8,16".into()).split(',').map(|s| s.parse().unwrap()).collect();
+    let preset = Preset { name: "tiny-c16", c3: [c3[0], c3[1]], ..Preset::tiny() };
+    let mut r = Renderer::new(&gpu, preset, &bytes, weights, 128).unwrap();
     let sv = ds.split(split);
     for (k, i) in sv.spread(4).enumerate() {
         let s = sv.get(i).unwrap();

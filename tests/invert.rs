@@ -153,6 +153,8 @@ fn texture_code_gradient_matches_finite_differences() {
     let gpu = Gpu::new().unwrap();
     let (tp, rp) = (TexturePreset::small(), Preset::tiny().with_colour());
     assert!(decoder_with_renderer(&tp, &Preset::tiny(), Head::Phong(phong_of(&Light::default())), 1, [32, 32]).is_err(), "a grey renderer has no colour to take");
+    let odd = rendernet::nn::texture::TextureDecoder::build(&TexturePreset { res: 12, ..TexturePreset::small() }, 1, false);
+    assert!(odd.is_err_and(|e| e.to_string().contains("multiple of 8")), "a 12^3 texture cannot be decoded from 4^3 doublings");
     let (mut net, code, occupancy) = decoder_with_renderer(&tp, &rp, Head::Phong(phong_of(&Light::default())), 1, [32, 32]).unwrap();
     let [h, w] = [net.graph.info(net.image).shape[2], net.graph.info(net.image).shape[3]];
     let target = net.graph.input("target", &[1, 3, h, w]).unwrap();

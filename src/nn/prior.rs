@@ -87,6 +87,9 @@ pub(crate) fn decoder(b: &mut Builder, p: &PriorPreset, code: Value) -> Result<V
 /// ELU between layers and a sigmoid at the end). Parameters are named `{prefix}.*`; the
 /// output value is named `output`. Shared by the shape prior and the texture decoder.
 pub(crate) fn grid_decoder(b: &mut Builder, prefix: &str, res: usize, dec: [usize; 4], out: usize, code: Value, output: &str) -> Result<Value> {
+    if res % 8 != 0 || res == 0 {
+        return Err(Error::Invalid(format!("a decoded grid's side ({res}) must be a positive multiple of 8")));
+    }
     let n = b.g.info(code).shape[0];
     let s = res / 8;
     let mut x = b.dense(&format!("{prefix}.fc"), code, dec[0] * s * s * s)?;

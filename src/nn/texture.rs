@@ -48,9 +48,6 @@ pub struct TextureDecoder {
 impl TextureDecoder {
     /// The decoder for batch `n`; with `with_loss`, MSE against a fed target.
     pub fn build(p: &TexturePreset, n: usize, with_loss: bool) -> Result<TextureDecoder> {
-        if p.res % 8 != 0 || p.res == 0 {
-            return Err(Error::Invalid(format!("texture grid side {} must be a positive multiple of 8", p.res)));
-        }
         let mut g = Graph::new();
         let code = g.input("code", &[n, TEXTURE_CODE, 1, 1])?;
         let texture = grid_decoder(&mut Builder { g: &mut g }, "tex", p.res, p.dec, 3, code, "texture")?;
