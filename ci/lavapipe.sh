@@ -20,7 +20,7 @@ if [ -z "${XDG_RUNTIME_DIR:-}" ]; then
     mkdir -p "$XDG_RUNTIME_DIR" && chmod 700 "$XDG_RUNTIME_DIR"
 fi
 # Opt-in, Debian 12 only: RENDERNET_MESA=25 selects Mesa 25 from bookworm-backports (the
-# whole tiny network 1.4x faster than Mesa 22.3.6 on an AMD Zen 3, README "Benchmarks"),
+# tiny network 1.0-1.4x faster than Mesa 22.3.6 on an AMD Zen 3, README "Benchmarks"),
 # extracted into a cache folder and chosen with VK_DRIVER_FILES; the system driver stays as
 # it is. CI uses the system driver.
 if [ "${RENDERNET_MESA:-}" = 25 ]; then
