@@ -191,7 +191,7 @@ fn texture_code_gradient_matches_finite_differences() {
 #[test]
 fn shape_search_lowers_the_image_loss() {
     use rendernet::graph::Executor;
-    use rendernet::invert::ShapeOptions;
+    use rendernet::invert::{ShapeOptions, ShapeView};
     use rendernet::nn::prior::{PriorPreset, ShapePrior};
     let gpu = Gpu::new().unwrap();
     let pp = PriorPreset::small();
@@ -205,8 +205,9 @@ fn shape_search_lowers_the_image_loss() {
     let (view, light) = (View::default(), Light::default());
     let target = reference::RayMarcher::new(&gpu).render(&gpu, &grid, &view, &light, Shader::Phong, 128).unwrap();
     let inv = Inverter::new(Preset::tiny(), TINY_PHONG_WEIGHTS, "embedded", Light::default());
-    let o = ShapeOptions { steps: 6, lr: 0.05, start: None };
-    let est = inv.recover_shape(&gpu, &pp, &prior_bytes, &target, &view, &light, &o).unwrap();
+    let o = ShapeOptions { steps: 6, lr: 0.05, ..ShapeOptions::default() };
+    let one = [ShapeView { image: &target, view, light }];
+    let est = inv.recover_shape(&gpu, &pp, &prior_bytes, &one, &o).unwrap();
     assert_eq!(est.curve.len(), 7);
     // An untrained decoder barely reacts to its code, so the loss falls only a little, but
     // it must fall at every step (the curve keeps the best so far: a wrong-signed gradient
@@ -215,5 +216,76 @@ fn shape_search_lowers_the_image_loss() {
     assert_eq!(est.grid.dims(), [32; 3]);
     assert!(est.grid.occupancy().iter().all(|&v| v > 0.0 && v < 1.0));
     let bad = ShapeOptions { start: Some(vec![0.5; 3]), ..o };
-    assert!(inv.recover_shape(&gpu, &pp, &prior_bytes, &target, &view, &light, &bad).unwrap_err().to_string().contains("3 entries"));
+    assert!(inv.recover_shape(&gpu, &pp, &prior_bytes, &one, &bad).unwrap_err().to_string().contains("3 entries"));
+    assert!(inv.recover_shape(&gpu, &pp, &prior_bytes, &[], &o).unwrap_err().to_string().contains("at least one image"));
+}
+
+/// Multi-start picks the start that explains the images: a prior whose decoder reacts
+/// strongly to its code (fc weights scaled up), code statistics holding 11 random codes,
+/// and two images (two views, two lights) rendered by the same decoder and network from
+/// the 7th. Scoring in batches must find it among the 12 starts (the mean code first), so
+/// the best start's decoded grid is the 7th code's; a wrong item order (codes or views
+/// mixed up in the batch) picks another. The stats survive the weights file, and the
+/// parameter loader ignores them.
+#[test]
+fn multi_start_finds_the_training_code_that_rendered_the_images() {
+    use rendernet::graph::Executor;
+    use rendernet::invert::{ShapeOptions, ShapeView};
+    use rendernet::nn::camera::{grid_from_input_values, light_values, pose_for_view};
+    use rendernet::nn::prior::{CodeStats, PriorPreset, ShapePrior, decoder_with_renderer};
+    use rendernet::nn::rendernet::{Head, phong_of};
+    let gpu = Gpu::new().unwrap();
+    let pp = PriorPreset::small();
+    let prior = Executor::new(&gpu, ShapePrior::build(&pp, 1, false).unwrap().graph, 5).unwrap();
+    for (name, gain) in [("dec.fc.weight", 40.0), ("dec.up0.weight", 4.0), ("dec.up1.weight", 4.0), ("dec.up2.weight", 4.0), ("dec.out.weight", 4.0)] {
+        let v = prior.graph().value(name).unwrap();
+        let w: Vec<f32> = prior.read(&gpu, v).unwrap().iter().map(|x| x * gain).collect();
+        prior.feed(&gpu, v, &w).unwrap();
+    }
+    let file = std::env::temp_dir().join(format!("rendernet-prior-multistart-{}.safetensors", std::process::id()));
+    prior.save_params(&gpu, &file).unwrap();
+    // Code k: high on every 11th entry from k, low elsewhere, so no two decode alike.
+    let codes: Vec<f32> = (0..11 * pp.latent).map(|i| if (i % pp.latent) % 11 == i / pp.latent { 0.95 } else { 0.05 }).collect();
+    let stats = CodeStats::of(codes.clone(), pp.latent).unwrap();
+    rendernet::train::prior::attach_code_stats(&file, &stats).unwrap();
+    let bytes = std::fs::read(&file).unwrap();
+    let _ = std::fs::remove_file(&file);
+    assert_eq!(CodeStats::from_weights(&bytes, "prior").unwrap().as_ref(), Some(&stats));
+    let mut reload = Executor::new(&gpu, ShapePrior::build(&pp, 1, false).unwrap().graph, 0).unwrap();
+    reload.load_params_bytes(&gpu, &bytes, "prior").expect("stats are not unexpected parameters");
+    // The images: code 6 decoded and rendered full frame by the shipped network.
+    let p = Preset::tiny();
+    let head_light = Light::default();
+    let (net, code) = decoder_with_renderer(&pp, &p, Head::Phong(phong_of(&head_light)), 1, [p.cam, p.cam]).unwrap();
+    let mut ex = Executor::new(&gpu, net.graph.clone(), 0).unwrap();
+    ex.load_params_parts(&gpu, &[(TINY_PHONG_WEIGHTS, "tiny", ""), (&bytes, "prior", "dec.")]).unwrap();
+    ex.training = false;
+    ex.keep(net.image);
+    ex.keep(net.grid);
+    let truth = &codes[6 * pp.latent..7 * pp.latent];
+    ex.feed(&gpu, code, truth).unwrap();
+    let shots = [(View { azimuth: 35.0, elevation: 70.0, radius: 3.3 }, Light { azimuth: 30.0, elevation: 60.0, ..head_light }),
+                 (View { azimuth: 200.0, elevation: 100.0, radius: 3.5 }, Light { azimuth: 120.0, elevation: 80.0, ..head_light })];
+    let mut images = Vec::new();
+    for (view, light) in &shots {
+        ex.feed(&gpu, net.pose, &pose_for_view(view, p.input, p.cam, None)).unwrap();
+        ex.feed(&gpu, net.light.unwrap(), &light_values(light)).unwrap();
+        ex.forward(&gpu).unwrap();
+        let size = p.image_for(p.cam);
+        images.push(reference::Image { channels: 3, size, data: ex.read(&gpu, net.image).unwrap() });
+    }
+    let truth_grid = grid_from_input_values(&ex.read(&gpu, net.grid).unwrap(), pp.res).unwrap();
+    let views: Vec<ShapeView> = images.iter().zip(&shots).map(|(image, (view, light))| ShapeView { image, view: *view, light: *light }).collect();
+    let inv = Inverter::new(p, TINY_PHONG_WEIGHTS, "embedded", head_light);
+    let o = ShapeOptions { steps: 2, candidates: 11, keep: 1, ..ShapeOptions::default() };
+    let est = inv.recover_shape(&gpu, &pp, &bytes, &views, &o).unwrap();
+    let other = grid_from_input_values(&{
+        ex.feed(&gpu, code, &codes[..pp.latent]).unwrap();
+        ex.forward(&gpu).unwrap();
+        ex.read(&gpu, net.grid).unwrap()
+    }, pp.res).unwrap();
+    let spread = other.occupancy().iter().zip(truth_grid.occupancy()).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+    assert!(spread > 0.1, "codes 0 and 6 decode alike (max difference {spread}): the test cannot tell them apart");
+    let diff = est.start_grid.occupancy().iter().zip(truth_grid.occupancy()).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+    assert!(diff < 1e-4, "the best start is not the code that rendered the images (max difference {diff})");
 }

@@ -129,8 +129,10 @@ fn decode(data: &[u8], p: &str) -> Result<(BTreeMap<String, (Vec<usize>, Vec<f32
 }
 
 /// Whether `name` is optimizer state in a checkpoint (see [`Executor::save_checkpoint`]).
-fn is_adam_state(name: &str) -> bool {
-    name.starts_with("adam.m.") || name.starts_with("adam.v.")
+/// Tensors a file may hold beside the parameters: a checkpoint's Adam moments, and the code
+/// statistics a shape prior keeps with its weights (`nn::prior::CodeStats`).
+fn is_state(name: &str) -> bool {
+    name.starts_with("adam.m.") || name.starts_with("adam.v.") || name.starts_with(crate::nn::prior::STATS_PREFIX)
 }
 
 impl Executor {
@@ -174,8 +176,9 @@ impl Executor {
         for &(bytes, name, prefix) in parts {
             let (f, b, _) = decode(bytes, name)?;
             // A checkpoint passed where weights are expected: its parameters serve as they
-            // are; the optimizer state is of no use outside training, so it is not "unexpected".
-            let keep = |k: &String| !is_adam_state(k) && k.starts_with(prefix);
+            // are; the optimizer state is of no use outside training, so it is not "unexpected"
+            // (nor are a prior's code statistics).
+            let keep = |k: &String| !is_state(k) && k.starts_with(prefix);
             for (k, v) in f.into_iter().filter(|(k, _)| keep(k)) {
                 if file.insert(k.clone(), v).is_some() {
                     return Err(Error::Invalid(format!("{name}: '{k}' is also in an earlier file")));
@@ -198,7 +201,7 @@ impl Executor {
         let mut r = InitReport::default();
         for v in self.graph().params() {
             let info = self.graph().info(v).clone();
-            match file.get(&info.name).filter(|_| !is_adam_state(&info.name)) {
+            match file.get(&info.name).filter(|_| !is_state(&info.name)) {
                 Some((shape, vals)) if *shape == info.shape => {
                     self.feed(gpu, v, vals)?;
                     r.loaded.push(info.name);

@@ -12,7 +12,7 @@
 //! op. The start with the lowest final MSE wins.
 
 mod shape;
-pub use shape::{ShapeError, ShapeEstimate, ShapeOptions, evaluate_shapes};
+pub use shape::{ShapeError, ShapeEstimate, ShapeOptions, ShapeView, evaluate_shapes};
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
@@ -416,6 +416,19 @@ impl Window {
             cam[2 + a] = len;
         }
         Window { cam, f }
+    }
+
+    /// The window of the same centre `len` camera voxels across (at most the camera's), so
+    /// that windows of several images share one network size.
+    fn resized(&self, p: &Preset, len: [usize; 2]) -> Window {
+        let mut cam = self.cam;
+        for a in 0..2 {
+            let l = len[a].min(p.cam);
+            let centre = self.cam[a] + self.cam[2 + a] / 2;
+            cam[a] = centre.saturating_sub(l / 2).min(p.cam - l);
+            cam[2 + a] = l;
+        }
+        Window { cam, f: self.f }
     }
 
     /// `[rows, columns]` of image pixels inside.

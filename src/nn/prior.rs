@@ -127,3 +127,79 @@ pub fn iou(a: &[f32], b: &[f32]) -> f64 {
     }
     if uni == 0 { 1.0 } else { inter as f64 / uni as f64 }
 }
+
+/// The distribution of a trained prior's codes over its training shapes, kept in the prior's
+/// weights file (tensors `stats.code_mean` `[L]`, `stats.code_std` `[L]`, `stats.codes`
+/// `[K, L]`; loaders of the parameters skip `stats.*`): the Gaussian the appendix's MAP
+/// search puts on the code, and `K` training shapes' codes to start the search from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CodeStats {
+    /// Mean code.
+    pub mean: Vec<f32>,
+    /// Standard deviation of each code entry.
+    pub std: Vec<f32>,
+    /// Codes of training shapes, `K * L` values, one code after another.
+    pub codes: Vec<f32>,
+}
+
+/// The prefix of the stats tensors in a prior's weights file.
+pub const STATS_PREFIX: &str = "stats.";
+
+impl CodeStats {
+    /// Mean and spread of `codes` (`K * latent` values), keeping them all.
+    pub fn of(codes: Vec<f32>, latent: usize) -> Result<CodeStats> {
+        let k = codes.len() / latent.max(1);
+        if latent == 0 || k == 0 || codes.len() % latent != 0 {
+            return Err(Error::Invalid(format!("code statistics need whole codes of {latent} entries; got {} values", codes.len())));
+        }
+        let at = |i: usize, j: usize| codes[i * latent + j] as f64;
+        let mean: Vec<f64> = (0..latent).map(|j| (0..k).map(|i| at(i, j)).sum::<f64>() / k as f64).collect();
+        let std = (0..latent).map(|j| ((0..k).map(|i| (at(i, j) - mean[j]).powi(2)).sum::<f64>() / k as f64).sqrt() as f32).collect();
+        Ok(CodeStats { mean: mean.into_iter().map(|m| m as f32).collect(), std, codes })
+    }
+
+    /// Code length.
+    pub fn latent(&self) -> usize {
+        self.mean.len()
+    }
+
+    /// The training codes, one slice per shape.
+    pub fn training_codes(&self) -> impl Iterator<Item = &[f32]> {
+        self.codes.chunks_exact(self.latent())
+    }
+
+    /// The stats as named tensors for a weights file.
+    pub fn tensors(&self) -> Vec<crate::graph::params::Named> {
+        let l = self.latent();
+        vec![
+            (format!("{STATS_PREFIX}code_mean"), vec![l], self.mean.clone()),
+            (format!("{STATS_PREFIX}code_std"), vec![l], self.std.clone()),
+            (format!("{STATS_PREFIX}codes"), vec![self.codes.len() / l, l], self.codes.clone()),
+        ]
+    }
+
+    /// The stats a weights file holds (`None` for a file without them, e.g. a prior trained
+    /// before they were kept); `name` labels the file in errors.
+    pub fn from_weights(bytes: &[u8], name: &str) -> Result<Option<CodeStats>> {
+        let st = safetensors::SafeTensors::deserialize(bytes).map_err(|e| Error::Invalid(format!("{name}: not a valid safetensors file: {e}")))?;
+        let get = |k: &str| -> Result<Option<(Vec<usize>, Vec<f32>)>> {
+            let Ok(v) = st.tensor(&format!("{STATS_PREFIX}{k}")) else { return Ok(None) };
+            if v.dtype() != safetensors::Dtype::F32 {
+                return Err(Error::Invalid(format!("{name}: '{STATS_PREFIX}{k}' is {:?}, expected F32", v.dtype())));
+            }
+            let vals: Vec<f32> = v.data().chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+            if vals.iter().any(|x| !x.is_finite()) {
+                return Err(Error::Invalid(format!("{name}: '{STATS_PREFIX}{k}' holds a value that is not finite")));
+            }
+            Ok(Some((v.shape().to_vec(), vals)))
+        };
+        let (Some((ms, mean)), Some((ss, std)), Some((cs, codes))) = (get("code_mean")?, get("code_std")?, get("codes")?) else {
+            return Ok(None);
+        };
+        let l = mean.len();
+        if ms.len() != 1 || ss != ms || cs.len() != 2 || cs[1] != l || cs[0] == 0 {
+            return Err(Error::Invalid(format!("{name}: code stats have shapes {ms:?}, {ss:?}, {cs:?}; expected [L], [L], [K, L] with K >= 1")));
+        }
+        Ok(Some(CodeStats { mean, std, codes }))
+    }
+}

@@ -7,7 +7,7 @@ use crate::data::{Dataset, Split};
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::graph::Executor;
-use crate::nn::prior::{PriorPreset, ShapePrior, iou};
+use crate::nn::prior::{CodeStats, PriorPreset, ShapePrior, iou};
 use crate::rng::SplitMix64;
 use super::steps::{self, StepConfig};
 use std::path::PathBuf;
@@ -57,6 +57,50 @@ pub fn evaluate(gpu: &Gpu, p: &PriorPreset, weights: &[u8], ds: &Dataset, sample
     Ok(sum / n as f64)
 }
 
+/// Training shapes whose codes a prior's weights file keeps ([`CodeStats`]).
+pub const STATS_SHAPES: usize = 256;
+
+/// The codes of `samples` training grids of `ds` (spread over the split) under the prior
+/// weights `weights`, and their mean and spread.
+pub fn code_stats(gpu: &Gpu, p: &PriorPreset, weights: &[u8], ds: &Dataset, samples: usize) -> Result<CodeStats> {
+    const BATCH: usize = 8;
+    let train = ds.split(Split::Train);
+    let ids: Vec<usize> = train.spread(samples).collect();
+    if ids.is_empty() {
+        return Err(Error::Invalid(format!("{}: the train split is empty", ds.dir().display())));
+    }
+    let net = ShapePrior::build(p, BATCH, false)?;
+    let mut ex = Executor::new(gpu, net.graph.clone(), 0)?;
+    ex.load_params_bytes(gpu, weights, "prior weights")?;
+    ex.training = false;
+    ex.keep(net.code);
+    let mut codes = Vec::with_capacity(ids.len() * p.latent);
+    for chunk in ids.chunks(BATCH) {
+        let mut grids = Vec::with_capacity(BATCH * p.res.pow(3));
+        for &i in chunk {
+            grids.extend(grid_of(ds, Split::Train, i, p.res)?);
+        }
+        // A short last batch is padded with its first grid; those codes are dropped.
+        let one = grids[..p.res.pow(3)].to_vec();
+        while grids.len() < BATCH * p.res.pow(3) {
+            grids.extend_from_slice(&one);
+        }
+        ex.feed(gpu, net.grid, &grids)?;
+        ex.forward(gpu)?;
+        codes.extend_from_slice(&ex.read(gpu, net.code)?[..chunk.len() * p.latent]);
+    }
+    CodeStats::of(codes, p.latent)
+}
+
+/// Rewrites the weights file `path` (atomically) with `stats` beside its parameters.
+pub fn attach_code_stats(path: &std::path::Path, stats: &CodeStats) -> Result<()> {
+    let (tensors, meta) = crate::graph::params::load_safetensors(path)?;
+    let mut named: Vec<crate::graph::params::Named> =
+        tensors.into_iter().filter(|(k, _)| !k.starts_with(crate::nn::prior::STATS_PREFIX)).map(|(k, (s, v))| (k, s, v)).collect();
+    named.extend(stats.tensors());
+    crate::graph::params::save_safetensors(path, &named, meta)
+}
+
 /// Trains as configured; `report(step, loss, iou)` after every step (`iou` at evaluations).
 /// Returns the last held-out IoU.
 pub fn train_prior(gpu: &Gpu, cfg: &PriorConfig, report: impl FnMut(u64, f32, Option<f64>)) -> Result<f64> {
@@ -81,5 +125,11 @@ pub fn train_prior(gpu: &Gpu, cfg: &PriorConfig, report: impl FnMut(u64, f32, Op
         }
         ex.feed(gpu, net.grid, &grids)
     };
-    steps::run(gpu, &mut ex, loss, s, feed, |w| evaluate(gpu, &preset, w, &ds, s.eval_samples), report)
+    // Each checkpoint's weights file also keeps the code statistics of its own weights.
+    let weights = s.out.with_extension("weights.safetensors");
+    let eval = |w: &[u8]| {
+        attach_code_stats(&weights, &code_stats(gpu, &preset, w, &ds, STATS_SHAPES)?)?;
+        evaluate(gpu, &preset, w, &ds, s.eval_samples)
+    };
+    steps::run(gpu, &mut ex, loss, s, feed, eval, report)
 }
