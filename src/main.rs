@@ -42,13 +42,15 @@ enum Cmd {
     /// Train the texture decoder (a code of 9 numbers -> an RGB grid over the object cube) on
     /// the procedural paints of `dataset --colour`, for recovering texture by inverse rendering.
     TrainTexture(cli::prior::TrainTextureArgs),
-    /// Recover held-out shapes through the shape prior (pose and light known) and report
-    /// their voxel IoU beside the prior's starting shape's.
+    /// Recover held-out shapes from one or more images through the shape prior (pose and
+    /// light known; MAP on the prior's code, multi-start) and report their voxel IoU beside
+    /// the best start's and the prior's mean shape's.
     EvalShape(cli::shape::EvalShapeArgs),
     /// Recover the camera pose and the light from one image of a known shape, by gradient
     /// descent through the frozen network (coarse silhouette search, then Adam on the best
-    /// starts). Without --image, the target is rendered from the scene flags and the errors
-    /// of the recovered pose and light are reported.
+    /// starts); with --prior, the shape too (alternating with a search on the shape prior's
+    /// code). Without --image, the target is rendered from the scene flags and the errors
+    /// of the recovered pose, light (and shape) are reported.
     Invert(cli::invert::InvertArgs),
     /// Invert held-out samples of a Phong dataset (shape known) and report camera and light
     /// direction errors in degrees (median, share within 5 and 10 degrees) and time per image.

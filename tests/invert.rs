@@ -71,6 +71,40 @@ fn invert_cli_reports_a_pose_and_rejects_a_wrong_image_size() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `invert --prior`: shape, camera and light together, on a seeded (untrained) prior and a
+/// tiny search; the grid file, the three-panel picture and the JSON's errors and IoU come
+/// out, and an output format it cannot write is refused before any work.
+#[test]
+fn invert_cli_with_a_prior_writes_the_recovered_grid() {
+    use rendernet::graph::Executor;
+    use rendernet::nn::prior::{PriorPreset, ShapePrior};
+    let gpu = Gpu::new().unwrap();
+    let dir = std::env::temp_dir().join(format!("rendernet-invert-prior-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let prior = dir.join("prior.safetensors");
+    Executor::new(&gpu, ShapePrior::build(&PriorPreset::small(), 1, false).unwrap().graph, 2).unwrap().save_params(&gpu, &prior).unwrap();
+    let (out, vox) = (dir.join("out.png"), dir.join("shape.binvox"));
+    let run = |args: &[&str]| std::process::Command::new(env!("CARGO_BIN_EXE_rendernet")).args(args).output().unwrap();
+    let p = prior.to_str().unwrap();
+    let o = run(&["invert", "--prior", p, "--out-voxels", dir.join("shape.obj").to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("shape.obj") && err.contains(".binvox"), "{err}");
+    let args = ["invert", "--prior", p, "--shape", "chair", "--resolution", "32", "--azimuths", "4", "--elevations", "2", "--starts", "1", "--steps", "2",
+        "--rounds", "1", "--shape-steps", "2", "--json", "--out", out.to_str().unwrap(), "--out-voxels", vox.to_str().unwrap()];
+    let o = run(&args);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{text}{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_str(&text).unwrap();
+    for key in ["azimuth", "light_azimuth", "pose_error_degrees", "light_error_degrees", "voxel_iou"] {
+        assert!(j[key].as_f64().is_some_and(f64::is_finite), "{key} missing in {text}");
+    }
+    assert_eq!(j["shape_loss_curve"].as_array().map(Vec::len), Some(3), "{text}");
+    assert_eq!(rendernet::voxel::binvox::Binvox::read(&vox).unwrap().grid.dims(), [32; 3]);
+    let png = image::open(&out).unwrap();
+    assert_eq!((png.width(), png.height()), (384, 128));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Shape recovery's graph: the shape prior's decoder in front of RenderNet. The gradient of
 /// the image loss with respect to the latent code (through the decoder, the resampling and
 /// the whole network) against central finite differences of the same loss, on three code

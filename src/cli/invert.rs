@@ -41,9 +41,26 @@ pub struct InvertArgs {
     /// Gradient steps of the refinement.
     #[arg(long, default_value_t = InvertOptions::default().steps)]
     steps: usize,
-    /// PNG with the input beside the network's render at the recovered pose and light.
+    /// PNG with the input beside the network's render at the recovered pose and light (with
+    /// --prior, also the recovered shape drawn by the reference renderer from 90 degrees
+    /// further round).
     #[arg(long, default_value = "invert.png")]
     out: PathBuf,
+    /// Shape prior weights (`rendernet train-prior`): recover the shape too, as the prior's
+    /// code, alternating with the camera and light search. --voxels/--shape then give only
+    /// the true shape (to render the target without --image, and to score the recovered
+    /// shape's IoU).
+    #[arg(long)]
+    prior: Option<PathBuf>,
+    /// With --prior: rounds of (camera and light search, shape search).
+    #[arg(long, default_value_t = 2)]
+    rounds: usize,
+    /// With --prior: Adam steps on the shape code per refined start, each round.
+    #[arg(long, default_value_t = rendernet::invert::ShapeOptions::default().steps)]
+    shape_steps: usize,
+    /// With --prior: where the recovered grid is written (.binvox, or .safetensors).
+    #[arg(long, default_value = "invert.binvox")]
+    out_voxels: PathBuf,
     /// Print JSON (pose, light, MSE, errors when known, loss curve, seconds) instead of text.
     #[arg(long)]
     json: bool,
@@ -53,6 +70,9 @@ pub struct InvertArgs {
 pub fn run(a: InvertArgs) -> Result<()> {
     let t0 = Instant::now();
     super::output::check_png_out(&a.out)?;
+    if a.prior.is_some() {
+        voxels_format(&a.out_voxels)?;
+    }
     let preset = a.net.preset()?;
     if a.image.is_none() {
         // The scene flags then describe the true view and light, rendered as the target.
@@ -72,6 +92,9 @@ pub fn run(a: InvertArgs) -> Result<()> {
         }
     };
     let o = InvertOptions { azimuths: a.azimuths, elevations: a.elevations, keep: a.starts, steps: a.steps, ..Default::default() };
+    if let Some(prior) = &a.prior {
+        return with_prior(&a, &gpu, &inv, prior, &grid, &target, truth, &o, t0);
+    }
     let bar = ProgressBar::new(o.steps as u64);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} refinement steps [{elapsed_precise}] {msg}").expect("static template"));
     let t1 = Instant::now();
@@ -111,6 +134,76 @@ pub fn run(a: InvertArgs) -> Result<()> {
         println!("errors against the true scene: camera direction {pe:.1} deg, light direction {le:.1} deg, radius x{rr:.3}");
     }
     println!("wrote {} (input | network at the recovered pose) in {:.1} s ({secs:.1} s inverting on {})", a.out.display(), t0.elapsed().as_secs_f64(), gpu.info.name);
+    Ok(())
+}
+
+/// The format `--out-voxels` names: `binvox` or `safetensors`, else an error.
+fn voxels_format(path: &std::path::Path) -> Result<&str> {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e @ ("binvox" | "safetensors")) => Ok(e),
+        _ => Err(Error::Invalid(format!("--out-voxels {}: write .binvox or .safetensors", path.display()))),
+    }
+}
+
+/// `invert --prior`: shape, camera and light recovered together; writes the grid and the
+/// picture, and reports the errors when the truth is known.
+#[allow(clippy::too_many_arguments)]
+fn with_prior(a: &InvertArgs, gpu: &Gpu, inv: &Inverter, prior_path: &std::path::Path, truth_grid: &rendernet::voxel::VoxelGrid, target: &Image, truth: Option<(rendernet::reference::View, Light)>, o: &InvertOptions, t0: Instant) -> Result<()> {
+    let ext = voxels_format(&a.out_voxels)?;
+    let pw = std::fs::read(prior_path).map_err(|e| Error::Io { path: prior_path.display().to_string(), source: e })?;
+    let pp = rendernet::nn::prior::PriorPreset::small();
+    let bar = ProgressBar::new(a.rounds.max(1) as u64);
+    bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} rounds (camera and light, then shape) [{elapsed_precise}]").expect("static template"));
+    let t1 = Instant::now();
+    let so = rendernet::invert::ShapeOptions { steps: a.shape_steps, ..Default::default() };
+    let est = inv.invert_unknown_shape(gpu, &pp, &pw, target, o, &so, a.rounds, |r, _| bar.set_position(r as u64))?;
+    bar.finish_and_clear();
+    let secs = t1.elapsed().as_secs_f64();
+    let grid = &est.shape.grid;
+    match ext {
+        "binvox" => rendernet::voxel::binvox::Binvox::from_grid(grid.clone()).write(&a.out_voxels)?,
+        _ => rendernet::voxel::safetensors_io::write(grid, &a.out_voxels)?,
+    }
+    let (view, light) = (est.pose.view, est.pose.light);
+    let turned = rendernet::reference::View { azimuth: (view.azimuth + 90.0) % 360.0, ..view };
+    let side = reference::RayMarcher::new(gpu).render(gpu, grid, &turned, &light, Shader::Phong, inv.size() as u32)?;
+    reference::write_png(&image::DynamicImage::ImageRgb8(Image::side_by_side(&[target, &est.pose.image, &side])?), &a.out)?;
+    let iou = truth.is_some().then(|| grid.resample_to(32).ok().and_then(|g| truth_grid.resample_to(32).ok().and_then(|t| g.iou(&t)))).flatten();
+    let errors = truth.map(|(v, l)| (angle_between(view_direction(&v), view_direction(&view)), angle_between(light_direction(&l), light_direction(&light))));
+    if a.json {
+        let mut j = serde_json::json!({
+            "azimuth": view.azimuth, "elevation": view.elevation, "radius": view.radius,
+            "light_azimuth": light.azimuth, "light_elevation": light.elevation, "mse": est.pose.mse,
+            "shape_loss_curve": est.shape.curve, "code": est.shape.code, "seconds": secs,
+            "out": a.out.display().to_string(), "out_voxels": a.out_voxels.display().to_string(),
+        });
+        if let Some((pe, le)) = errors {
+            j["pose_error_degrees"] = pe.into();
+            j["light_error_degrees"] = le.into();
+        }
+        if let Some(iou) = iou {
+            j["voxel_iou"] = iou.into();
+        }
+        println!("{}", serde_json::to_string_pretty(&j).map_err(|e| Error::Invalid(e.to_string()))?);
+        return Ok(());
+    }
+    println!("recovered shape, camera and light ({} rounds, prior {})", a.rounds.max(1), prior_path.display());
+    println!(
+        "camera: azimuth {:.1} elevation {:.1} radius {:.2}; light azimuth {:.1} elevation {:.1}; re-render MSE {:.5}",
+        view.azimuth, view.elevation, view.radius, light.azimuth, light.elevation, est.pose.mse
+    );
+    if let Some((pe, le)) = errors {
+        println!("errors against the true scene: camera direction {pe:.1} deg, light direction {le:.1} deg");
+    }
+    if let Some(iou) = iou {
+        println!("voxel IoU of the recovered shape against the true one (32^3): {iou:.3}");
+    }
+    println!(
+        "wrote {} (input | network at the estimate | recovered shape turned 90 degrees) and {} in {:.1} s",
+        a.out.display(),
+        a.out_voxels.display(),
+        t0.elapsed().as_secs_f64()
+    );
     Ok(())
 }
 

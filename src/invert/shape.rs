@@ -254,6 +254,69 @@ impl Inverter {
     }
 }
 
+/// The grids the prior `prior` (weights `prior_weights`, `dec.*` used) decodes from `codes`
+/// (`K * latent` values).
+pub fn decode_codes(gpu: &Gpu, prior: &PriorPreset, prior_weights: &[u8], codes: &[f32]) -> Result<Vec<VoxelGrid>> {
+    let k = codes.len() / prior.latent;
+    if k == 0 || codes.len() % prior.latent != 0 {
+        return Err(Error::Invalid(format!("{} values are not whole codes of {} entries", codes.len(), prior.latent)));
+    }
+    let mut g = crate::graph::Graph::new();
+    let code = g.input("code", &[k, prior.latent, 1, 1])?;
+    let recon = crate::nn::prior::decoder(&mut crate::nn::rendernet::Builder { g: &mut g }, prior, code)?;
+    let mut ex = Executor::new(gpu, g, 0)?;
+    ex.load_params_parts(gpu, &[(prior_weights, "prior", "dec.")])?;
+    ex.training = false;
+    ex.keep(recon);
+    ex.feed(gpu, code, codes)?;
+    ex.forward(gpu)?;
+    let v = ex.read(gpu, recon)?;
+    v.chunks(prior.res.pow(3)).map(|c| camera::grid_from_input_values(c, prior.res)).collect()
+}
+
+/// What [`Inverter::invert_unknown_shape`] found.
+#[derive(Clone, Debug)]
+pub struct JointEstimate {
+    /// Camera and light (searched with the last round's shape).
+    pub pose: super::Estimate,
+    /// The shape (recovered at that camera and light).
+    pub shape: ShapeEstimate,
+}
+
+impl Inverter {
+    /// Shape, camera and light from one image of an unknown object, by alternation: the
+    /// camera and light are searched (as [`Inverter::invert`]) with the prior's mean shape,
+    /// the shape is then searched at them (as [`Inverter::recover_shape`]); each further
+    /// round searches the camera and light again with the shape just found, then the shape.
+    /// `progress(round, rounds)` after each round.
+    #[allow(clippy::too_many_arguments)]
+    pub fn invert_unknown_shape(
+        &self,
+        gpu: &Gpu,
+        prior: &PriorPreset,
+        prior_weights: &[u8],
+        target: &Image,
+        po: &super::InvertOptions,
+        so: &ShapeOptions,
+        rounds: usize,
+        mut progress: impl FnMut(usize, usize),
+    ) -> Result<JointEstimate> {
+        let mean = CodeStats::from_weights(prior_weights, "prior")?.map_or_else(|| vec![0.5; prior.latent], |s| s.mean);
+        let mut grid = decode_codes(gpu, prior, prior_weights, &mean)?.remove(0);
+        let rounds = rounds.max(1);
+        let mut last = None;
+        for r in 0..rounds {
+            let pose = self.invert(gpu, &grid, target, po, |_, _| {})?;
+            let view = [ShapeView { image: target, view: pose.view, light: pose.light }];
+            let shape = self.recover_shape(gpu, prior, prior_weights, &view, so)?;
+            grid = shape.grid.clone();
+            last = Some(JointEstimate { pose, shape });
+            progress(r + 1, rounds);
+        }
+        Ok(last.expect("at least one round"))
+    }
+}
+
 /// One held-out shape's recovery, scored.
 #[derive(Clone, Debug)]
 pub struct ShapeError {
