@@ -455,8 +455,10 @@ fn stress_unseen_scores_every_shape_file_of_a_folder() {
 
 /// `train-prior` trains the shape autoencoder on a dataset's grids: it writes the checkpoint
 /// and the weights, reports a held-out IoU in 0..1, resumes from its checkpoint, and refuses
-/// to overwrite a checkpoint without --resume or --force; `eval-shape` then recovers a
-/// held-out shape through it and reports IoUs in 0..1.
+/// to overwrite a checkpoint without --resume or --force, and keeps its training codes'
+/// statistics in the weights file; `eval-shape` then recovers a held-out shape through it
+/// from one and from two views, and through the shipped prior, and reports IoUs in 0..1;
+/// more views than the dataset has is an error naming both counts.
 #[test]
 fn train_prior_trains_resumes_and_reports_iou() {
     let dir = std::env::temp_dir().join(format!("rendernet-cli-prior-{}", std::process::id()));
@@ -474,11 +476,19 @@ fn train_prior_trains_resumes_and_reports_iou() {
     let out = run_ok(&[&["train-prior", "--steps", "4", "--resume", c][..], &common[..]].concat());
     assert!(out.contains("step 4/4"), "{out}");
     let w = ckpt.with_extension("weights.safetensors");
-    let out = run_ok(&["eval-shape", "--data", d, "--prior", w.to_str().unwrap(), "--samples", "1", "--steps", "2", "--json"]);
-    let j: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"));
-    for key in ["iou_mean", "start_iou_mean"] {
-        assert!(j[key].as_f64().is_some_and(|v| (0.0..=1.0).contains(&v)), "{key} in {out}");
+    let stats = rendernet::nn::prior::CodeStats::from_weights(&std::fs::read(&w).unwrap(), "prior").unwrap().expect("code statistics kept");
+    assert_eq!((stats.latent(), stats.training_codes().count()), (64, 2), "the one training shape's two views");
+    let ws = w.to_str().unwrap();
+    for args in [&["--prior", ws, "--views", "1"][..], &["--prior", ws, "--views", "2"], &["--views", "1"]] {
+        let out = run_ok(&[&["eval-shape", "--data", d, "--samples", "1", "--steps", "2", "--json"][..], args].concat());
+        let j: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"));
+        for key in ["iou_mean", "retrieved_iou_mean", "start_iou_mean"] {
+            assert!(j[key].as_f64().is_some_and(|v| (0.0..=1.0).contains(&v)), "{key} in {out}");
+        }
     }
+    let bad = rendernet().args(["eval-shape", "--data", d, "--prior", ws, "--views", "3"]).output().unwrap();
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && err.contains("3 views") && err.contains("as few as 2"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -71,9 +71,10 @@ fn invert_cli_reports_a_pose_and_rejects_a_wrong_image_size() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `invert --prior`: shape, camera and light together, on a seeded (untrained) prior and a
-/// tiny search; the grid file, the three-panel picture and the JSON's errors and IoU come
-/// out, and an output format it cannot write is refused before any work.
+/// `invert --prior`: shape, camera and light together, with the shipped prior (the flag
+/// without a value) and a tiny search; the grid file, the three-panel picture and the
+/// JSON's errors and IoU come out, and an output format it cannot write is refused before
+/// any work.
 #[test]
 fn invert_cli_with_a_prior_writes_the_recovered_grid() {
     use rendernet::graph::Executor;
@@ -89,7 +90,7 @@ fn invert_cli_with_a_prior_writes_the_recovered_grid() {
     let o = run(&["invert", "--prior", p, "--out-voxels", dir.join("shape.obj").to_str().unwrap()]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("shape.obj") && err.contains(".binvox"), "{err}");
-    let args = ["invert", "--prior", p, "--shape", "chair", "--resolution", "32", "--azimuths", "4", "--elevations", "2", "--starts", "1", "--steps", "2",
+    let args = ["invert", "--prior", "--shape", "chair", "--resolution", "32", "--azimuths", "4", "--elevations", "2", "--starts", "1", "--steps", "2",
         "--rounds", "1", "--shape-steps", "2", "--json", "--out", out.to_str().unwrap(), "--out-voxels", vox.to_str().unwrap()];
     let o = run(&args);
     let text = String::from_utf8_lossy(&o.stdout);

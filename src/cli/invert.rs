@@ -46,12 +46,12 @@ pub struct InvertArgs {
     /// further round).
     #[arg(long, default_value = "invert.png")]
     out: PathBuf,
-    /// Shape prior weights (`rendernet train-prior`): recover the shape too, as the prior's
-    /// code, alternating with the camera and light search. --voxels/--shape then give only
-    /// the true shape (to render the target without --image, and to score the recovered
-    /// shape's IoU).
-    #[arg(long)]
-    prior: Option<PathBuf>,
+    /// Recover the shape too, as the code of a shape prior, alternating with the camera and
+    /// light search: `--prior` alone takes the shipped chair prior, `--prior FILE` weights
+    /// from `rendernet train-prior`. --voxels/--shape then give only the true shape (to
+    /// render the target without --image, and to score the recovered shape's IoU).
+    #[arg(long, value_name = "FILE", num_args = 0..=1)]
+    prior: Option<Option<PathBuf>>,
     /// With --prior: rounds of (camera and light search, shape search).
     #[arg(long, default_value_t = 2)]
     rounds: usize,
@@ -93,7 +93,7 @@ pub fn run(a: InvertArgs) -> Result<()> {
     };
     let o = InvertOptions { azimuths: a.azimuths, elevations: a.elevations, keep: a.starts, steps: a.steps, ..Default::default() };
     if let Some(prior) = &a.prior {
-        return with_prior(&a, &gpu, &inv, prior, &grid, &target, truth, &o, t0);
+        return with_prior(&a, &gpu, &inv, prior.as_deref(), &grid, &target, truth, &o, t0);
     }
     let bar = ProgressBar::new(o.steps as u64);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} refinement steps [{elapsed_precise}] {msg}").expect("static template"));
@@ -148,9 +148,9 @@ fn voxels_format(path: &std::path::Path) -> Result<&str> {
 /// `invert --prior`: shape, camera and light recovered together; writes the grid and the
 /// picture, and reports the errors when the truth is known.
 #[allow(clippy::too_many_arguments)]
-fn with_prior(a: &InvertArgs, gpu: &Gpu, inv: &Inverter, prior_path: &std::path::Path, truth_grid: &rendernet::voxel::VoxelGrid, target: &Image, truth: Option<(rendernet::reference::View, Light)>, o: &InvertOptions, t0: Instant) -> Result<()> {
+fn with_prior(a: &InvertArgs, gpu: &Gpu, inv: &Inverter, prior: Option<&std::path::Path>, truth_grid: &rendernet::voxel::VoxelGrid, target: &Image, truth: Option<(rendernet::reference::View, Light)>, o: &InvertOptions, t0: Instant) -> Result<()> {
     let ext = voxels_format(&a.out_voxels)?;
-    let pw = std::fs::read(prior_path).map_err(|e| Error::Io { path: prior_path.display().to_string(), source: e })?;
+    let (pw, prior_name) = super::prior::load_prior(prior)?;
     let pp = rendernet::nn::prior::PriorPreset::small();
     let bar = ProgressBar::new(a.rounds.max(1) as u64);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} rounds (camera and light, then shape) [{elapsed_precise}]").expect("static template"));
@@ -187,7 +187,7 @@ fn with_prior(a: &InvertArgs, gpu: &Gpu, inv: &Inverter, prior_path: &std::path:
         println!("{}", serde_json::to_string_pretty(&j).map_err(|e| Error::Invalid(e.to_string()))?);
         return Ok(());
     }
-    println!("recovered shape, camera and light ({} rounds, prior {})", a.rounds.max(1), prior_path.display());
+    println!("recovered shape, camera and light ({} rounds, prior {})", a.rounds.max(1), prior_name);
     println!(
         "camera: azimuth {:.1} elevation {:.1} radius {:.2}; light azimuth {:.1} elevation {:.1}; re-render MSE {:.5}",
         view.azimuth, view.elevation, view.radius, light.azimuth, light.elevation, est.pose.mse

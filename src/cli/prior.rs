@@ -100,6 +100,16 @@ fn step_config(s: &StepArgs) -> StepConfig {
     }
 }
 
+/// The shape prior a command reads: the file at `path`, or the shipped chair prior without
+/// one; returns its bytes and a label.
+pub fn load_prior(path: Option<&std::path::Path>) -> Result<(Vec<u8>, String)> {
+    let Some(path) = path else {
+        return Ok((rendernet::nn::prior::PRIOR_CHAIRS_WEIGHTS.to_vec(), "the shipped chair prior".into()));
+    };
+    let bytes = std::fs::read(path).map_err(|e| rendernet::Error::Io { path: path.display().to_string(), source: e })?;
+    Ok((bytes, path.display().to_string()))
+}
+
 /// Runs prior training.
 pub fn run(a: TrainPriorArgs) -> Result<()> {
     let cfg = PriorConfig { preset: PriorPreset::small(), data: a.data.clone(), steps: step_config(&a.s) };

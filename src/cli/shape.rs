@@ -17,9 +17,10 @@ pub struct EvalShapeArgs {
     /// must have the prior's side (32).
     #[arg(long)]
     data: PathBuf,
-    /// Shape prior weights from `rendernet train-prior` (`<out>.weights.safetensors`).
-    #[arg(long)]
-    prior: PathBuf,
+    /// Shape prior weights from `rendernet train-prior` (`<out>.weights.safetensors`); the
+    /// shipped chair prior without it.
+    #[arg(long, value_name = "FILE")]
+    prior: Option<PathBuf>,
     /// Held-out shapes, spread over the split (0 = all).
     #[arg(long, default_value_t = 8)]
     samples: usize,
@@ -54,7 +55,7 @@ pub fn run(a: EvalShapeArgs) -> Result<()> {
     let gpu = Gpu::new()?;
     let ds = Dataset::open(&a.data)?;
     let (inv, name) = super::invert::dataset_inverter(&a.net, &ds)?;
-    let prior = std::fs::read(&a.prior).map_err(|e| Error::Io { path: a.prior.display().to_string(), source: e })?;
+    let (prior, prior_name) = super::prior::load_prior(a.prior.as_deref())?;
     let o = ShapeOptions { steps: a.steps, lr: a.lr, start: None, candidates: a.candidates, keep: a.keep, prior_weight: a.prior_weight };
     let bar = ProgressBar::new(a.samples as u64);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} shapes [{elapsed_precise}<{eta_precise}]").expect("static template"));
@@ -75,7 +76,7 @@ pub fn run(a: EvalShapeArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&j).map_err(|e| Error::Invalid(e.to_string()))?);
         return Ok(());
     }
-    println!("{} held-out shapes of {}, {} view(s) each, pose and light known, {} with prior {}", errs.len(), a.data.display(), a.views, name, a.prior.display());
+    println!("{} held-out shapes of {}, {} view(s) each, pose and light known, {} with prior {}", errs.len(), a.data.display(), a.views, name, prior_name);
     println!("voxel IoU {:.3} ± {:.3} (95%); best start before descent {:.3} ± {:.3}; the prior's mean shape alone {:.3} ± {:.3}", iou.mean, iou.ci95, retrieved.mean, retrieved.ci95, start.mean, start.ci95);
     println!("{:.1} s per shape (mean)", secs.mean);
     Ok(())
