@@ -159,6 +159,9 @@ fn mse(a: &[f32], b: &[f32]) -> f64 {
     a.iter().zip(b).map(|(&x, &y)| (x as f64 - y as f64).powi(2)).sum::<f64>() / a.len().max(1) as f64
 }
 
+/// A code's prior term and its gradient (see [`prior_term`]).
+type Penalty<'a> = dyn Fn(&[f32]) -> (f64, Vec<f64>) + 'a;
+
 /// The code's Gaussian prior term and its gradient: `weight` times the mean over entries of
 /// `((z - mean) / std)^2`, the spread floored so a saturated entry does not dominate.
 fn prior_term(z: &[f32], stats: Option<&CodeStats>, weight: f64) -> (f64, Vec<f64>) {
@@ -226,7 +229,7 @@ impl Inverter {
     }
 
     /// Adam on the code from `z`: the best (loss, code) met and the best-so-far curve.
-    fn descend(&self, gpu: &Gpu, search: &mut CodeSearch, mut z: Vec<f32>, penalty: &dyn Fn(&[f32]) -> (f64, Vec<f64>), o: &ShapeOptions) -> Result<(f64, Vec<f32>, Vec<f64>)> {
+    fn descend(&self, gpu: &Gpu, search: &mut CodeSearch, mut z: Vec<f32>, penalty: &Penalty, o: &ShapeOptions) -> Result<(f64, Vec<f32>, Vec<f64>)> {
         let (mut m, mut v) = (vec![0.0f64; z.len()], vec![0.0f64; z.len()]);
         let (b1, b2) = (0.9f64, 0.999f64);
         let mut curve = Vec::with_capacity(o.steps + 1);
@@ -258,7 +261,7 @@ impl Inverter {
 /// (`K * latent` values).
 pub fn decode_codes(gpu: &Gpu, prior: &PriorPreset, prior_weights: &[u8], codes: &[f32]) -> Result<Vec<VoxelGrid>> {
     let k = codes.len() / prior.latent;
-    if k == 0 || codes.len() % prior.latent != 0 {
+    if k == 0 || !codes.len().is_multiple_of(prior.latent) {
         return Err(Error::Invalid(format!("{} values are not whole codes of {} entries", codes.len(), prior.latent)));
     }
     let mut g = crate::graph::Graph::new();

@@ -153,7 +153,7 @@ impl CodeStats {
     /// Mean and spread of `codes` (`K * latent` values), keeping them all.
     pub fn of(codes: Vec<f32>, latent: usize) -> Result<CodeStats> {
         let k = codes.len() / latent.max(1);
-        if latent == 0 || k == 0 || codes.len() % latent != 0 {
+        if latent == 0 || k == 0 || !codes.len().is_multiple_of(latent) {
             return Err(Error::Invalid(format!("code statistics need whole codes of {latent} entries; got {} values", codes.len())));
         }
         let at = |i: usize, j: usize| codes[i * latent + j] as f64;
