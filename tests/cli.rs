@@ -486,6 +486,14 @@ fn train_prior_trains_resumes_and_reports_iou() {
             assert!(j[key].as_f64().is_some_and(|v| (0.0..=1.0).contains(&v)), "{key} in {out}");
         }
     }
+    // Camera and light searched too (a tiny search is not exposed: the default one, 1 round).
+    let out = run_ok(&["eval-shape", "--data", d, "--prior", ws, "--samples", "1", "--steps", "1", "--unknown-pose", "--rounds", "1", "--json"]);
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"));
+    for key in ["iou_mean", "pose_error_degrees_median", "light_error_degrees_median"] {
+        assert!(j[key].as_f64().is_some_and(f64::is_finite), "{key} in {out}");
+    }
+    let bad = rendernet().args(["eval-shape", "--data", d, "--prior", ws, "--views", "2", "--unknown-pose"]).output().unwrap();
+    assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("one view per shape"));
     let bad = rendernet().args(["eval-shape", "--data", d, "--prior", ws, "--views", "3"]).output().unwrap();
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(!bad.status.success() && err.contains("3 views") && err.contains("as few as 2"), "{err}");

@@ -12,7 +12,7 @@
 //! op. The start with the lowest final MSE wins.
 
 mod shape;
-pub use shape::{JointEstimate, ShapeError, ShapeEstimate, ShapeOptions, ShapeView, decode_codes, evaluate_shapes};
+pub use shape::{JointEstimate, PoseSource, ShapeError, ShapeEstimate, ShapeOptions, ShapeView, decode_codes, evaluate_shapes};
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;

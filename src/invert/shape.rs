@@ -337,13 +337,30 @@ pub struct ShapeError {
     pub iou_start: f64,
     /// Final loss (image MSE over the search windows plus the code's prior term).
     pub loss: f64,
+    /// With the pose searched: the angles in degrees between the true and recovered camera
+    /// directions and light directions.
+    pub pose_light_degrees: Option<(f64, f64)>,
     /// Wall time of the search.
     pub seconds: f64,
 }
 
+/// Where [`evaluate_shapes`] takes each image's camera and light from.
+#[derive(Clone, Debug)]
+pub enum PoseSource {
+    /// The dataset's true ones.
+    Known,
+    /// Searched with the shape ([`Inverter::invert_unknown_shape`]; one view only).
+    Searched {
+        /// The camera and light search.
+        options: super::InvertOptions,
+        /// Rounds of (camera and light, shape).
+        rounds: usize,
+    },
+}
+
 /// Recovers the shapes of `samples` held-out shapes of `ds` (spread over the split's
-/// shapes; 0 = all), each from its first `views` images at their true poses and lights,
-/// and scores them by voxel IoU. The dataset's grids must have the prior's side.
+/// shapes; 0 = all), each from its first `views` images at the poses and lights `pose`
+/// says, and scores them by voxel IoU. The dataset's grids must have the prior's side.
 /// `progress(done, total)`.
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate_shapes(
@@ -354,9 +371,13 @@ pub fn evaluate_shapes(
     ds: &crate::data::Dataset,
     samples: usize,
     views: usize,
+    pose: &PoseSource,
     o: &ShapeOptions,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<Vec<ShapeError>> {
+    if views != 1 && matches!(pose, PoseSource::Searched { .. }) {
+        return Err(Error::Invalid(format!("a searched pose takes one view per shape; {views} asked")));
+    }
     let test = ds.split(crate::data::Split::Test);
     // Test samples grouped by shape, in split order.
     let mut shapes: Vec<(u32, Vec<usize>)> = Vec::new();
@@ -382,7 +403,18 @@ pub fn evaluate_shapes(
         }
         let sv: Vec<ShapeView> = picked.iter().map(|s| Ok(ShapeView { image: super::phong_target(ds, s)?, view: s.view, light: s.light })).collect::<Result<_>>()?;
         let t = std::time::Instant::now();
-        let est = inv.recover_shape(gpu, prior, prior_weights, &sv, o)?;
+        let (est, pose_light_degrees) = match pose {
+            PoseSource::Known => (inv.recover_shape(gpu, prior, prior_weights, &sv, o)?, None),
+            PoseSource::Searched { options, rounds } => {
+                let j = inv.invert_unknown_shape(gpu, prior, prior_weights, sv[0].image, options, o, *rounds, |_, _| {})?;
+                let err = |a: [f64; 3], b: [f64; 3]| super::angle_between(a, b);
+                let degrees = (
+                    err(super::view_direction(&sv[0].view), super::view_direction(&j.pose.view)),
+                    err(super::light_direction(&sv[0].light), super::light_direction(&j.pose.light)),
+                );
+                (j.shape, Some(degrees))
+            }
+        };
         let seconds = t.elapsed().as_secs_f64();
         let mean = inv.recover_shape(gpu, prior, prior_weights, &sv[..1], &ShapeOptions { steps: 0, candidates: 0, keep: 1, ..o.clone() })?;
         let iou = |g: &VoxelGrid| crate::nn::prior::iou(g.occupancy(), truth.occupancy());
@@ -393,6 +425,7 @@ pub fn evaluate_shapes(
             iou_retrieved: iou(&est.start_grid),
             iou_start: iou(&mean.grid),
             loss: *est.curve.last().unwrap_or(&f64::NAN),
+            pose_light_degrees,
             seconds,
         });
         progress(k + 1, n);
