@@ -75,11 +75,18 @@ fn mismatched_shapes_are_errors_not_panics() {
     assert!(err.to_string().contains("does not match"), "{err}");
 }
 
+/// Both kernels: a spatial size that is a multiple of 4 (four elements per invocation) and
+/// one that is not (one per invocation).
 #[test]
 fn prelu_forward_and_backward() {
-    // [N, C, D, H, W] = [2, 5, 3, 4, 3]: channels not a multiple of 4, odd spatial dims.
-    let shape = [2, 5, 3, 4, 3];
-    let (c, s) = (5, 36);
+    // [N, C, D, H, W]: channels not a multiple of 4, odd spatial dims; S = 36, then 27.
+    for shape in [[2, 5, 3, 4, 3], [2, 5, 3, 3, 3]] {
+        prelu_case(shape);
+    }
+}
+
+fn prelu_case(shape: [usize; 5]) {
+    let (c, s) = (shape[1], shape[2..].iter().product::<usize>());
     let n: usize = shape.iter().product();
     let mut rng = Rng(4);
     let x = f32_round(&away_from_zero(&mut rng, n, 1e-3));
@@ -91,12 +98,13 @@ fn prelu_forward_and_backward() {
         prelu::forward(gpu(), p, &tx, &ta, &ty)?;
         prelu::backward(gpu(), p, &tx, &ta, &tr, &tdx, &tda)
     });
-    assert_close("prelu forward", &download(&ty), &prelu_ref(&x, &alpha, c, s), 1e-6, 1e-5);
+    let what = |t: &str| format!("prelu {t}, shape {shape:?}");
+    assert_close(&what("forward"), &download(&ty), &prelu_ref(&x, &alpha, c, s), 1e-6, 1e-5);
     let want_dx = fd_grad(&x, |x| dot(&r, &prelu_ref(x, &alpha, c, s)));
-    assert_close("prelu backward input", &download(&tdx), &want_dx, 1e-6, 1e-4);
+    assert_close(&what("backward input"), &download(&tdx), &want_dx, 1e-6, 1e-4);
     // dalpha sums ~36 terms of size <= 3 per channel: 1e-5 absolute is > 10x f32 error.
     let want_da = fd_grad(&alpha, |a| dot(&r, &prelu_ref(&x, a, c, s)));
-    assert_close("prelu backward alpha", &download(&tda), &want_da, 1e-5, 1e-4);
+    assert_close(&what("backward alpha"), &download(&tda), &want_da, 1e-5, 1e-4);
 }
 
 #[test]

@@ -29,12 +29,19 @@ fn params([n, c, s]: [usize; 3]) -> Params {
     Params { n: (n * c * s) as u32, c: c as u32, s: s as u32 }
 }
 
+/// The entry point (`{stem}` or `{stem}_vec4`, four elements per invocation, where every
+/// channel's run of `s` values splits into whole vec4s) and its invocation count.
+fn entry([n, c, s]: [usize; 3], scalar: &'static str, vec4: &'static str) -> (&'static str, u64) {
+    if s.is_multiple_of(4) { (vec4, (n * c * s / 4) as u64) } else { (scalar, (n * c * s) as u64) }
+}
+
 /// `y = x` where `x > 0`, else `alpha[c] * x`; `alpha` is `[C]`.
 pub fn forward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, alpha: &Tensor, y: &Tensor) -> Result<()> {
     let d = dims(x, alpha)?;
     expect_shape("prelu", "output", y, x.shape())?;
     let args = [Arg::R(x), Arg::R(alpha), Arg::W(y)];
-    gpu.dispatch(pass, SHADER, "prelu_forward", &params(d), &args, grid_1d(x.numel() as u64, 64)?)
+    let (e, count) = entry(d, "prelu_forward", "prelu_forward_vec4");
+    gpu.dispatch(pass, SHADER, e, &params(d), &args, grid_1d(count, 64)?)
 }
 
 /// Gradients to the input (`dx`, shape of `x`) and to the slopes (`dalpha`, `[C]`).
@@ -54,6 +61,7 @@ pub fn backward(
     expect_shape("prelu", "dalpha", dalpha, alpha.shape())?;
     let contrib = gpu.scratch(x.shape())?;
     let args = [Arg::R(x), Arg::R(alpha), Arg::R(dy), Arg::W(dx), Arg::W(&contrib)];
-    gpu.dispatch(pass, SHADER, "prelu_backward", &params(d), &args, grid_1d(x.numel() as u64, 64)?)?;
+    let (e, count) = entry(d, "prelu_backward", "prelu_backward_vec4");
+    gpu.dispatch(pass, SHADER, e, &params(d), &args, grid_1d(count, 64)?)?;
     reduce::sum_outer_inner(gpu, pass, &contrib, d, 1.0, dalpha)
 }
