@@ -353,17 +353,28 @@ impl SplitView<'_> {
         (0..n).map(move |k| k * len / n)
     }
 
-    /// Sample `i` (`0..len`), decoding its shard on first use.
-    pub fn get(&self, i: usize) -> Result<Sample> {
-        let ds = self.ds;
+    /// The shape sample `i` shows, without reading its grid or images.
+    pub fn shape_id(&self, i: usize) -> Result<u32> {
+        self.check(i)?;
+        Ok(self.ds.shard(self.split, i / SHARD_SIZE)?.shape_ids[i % SHARD_SIZE] as u32)
+    }
+
+    fn check(&self, i: usize) -> Result<()> {
         if i >= self.len() {
             return Err(Error::Invalid(format!(
                 "{}: {} sample {i} out of range (0..{})",
-                ds.dir.display(),
+                self.ds.dir.display(),
                 self.split.name(),
                 self.len()
             )));
         }
+        Ok(())
+    }
+
+    /// Sample `i` (`0..len`), decoding its shard on first use.
+    pub fn get(&self, i: usize) -> Result<Sample> {
+        let ds = self.ds;
+        self.check(i)?;
         let shard = ds.shard(self.split, i / SHARD_SIZE)?;
         let j = i % SHARD_SIZE;
         debug_assert!(j < shard.len);

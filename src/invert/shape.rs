@@ -382,7 +382,7 @@ pub fn evaluate_shapes(
     // Test samples grouped by shape, in split order.
     let mut shapes: Vec<(u32, Vec<usize>)> = Vec::new();
     for i in 0..test.len() {
-        let id = test.get(i)?.shape_id;
+        let id = test.shape_id(i)?;
         match shapes.last_mut() {
             Some((s, list)) if *s == id => list.push(i),
             _ => shapes.push((id, vec![i])),
