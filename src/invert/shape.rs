@@ -34,11 +34,14 @@ pub struct ShapeOptions {
     /// Weight of the code's Gaussian prior: the loss is the image MSE plus this times the
     /// mean over code entries of `((z - mean) / std)^2` (0 without code statistics).
     pub prior_weight: f64,
+    /// Add the MSE between the network's mask and the images' foreground (pixels brighter
+    /// than `metrics::FOREGROUND`) to the loss: the silhouette, weighted like the shading.
+    pub silhouette: bool,
 }
 
 impl Default for ShapeOptions {
     fn default() -> Self {
-        ShapeOptions { steps: 40, lr: 0.02, start: None, candidates: 64, keep: 2, prior_weight: 1e-3 }
+        ShapeOptions { steps: 40, lr: 0.02, start: None, candidates: 64, keep: 2, prior_weight: 1e-3, silhouette: false }
     }
 }
 
@@ -81,19 +84,30 @@ struct CodeSearch {
     codes: usize,
     /// Each view's cropped image.
     targets: Vec<Vec<f32>>,
+    /// With the silhouette term: the mask value and each view's cropped foreground.
+    masks: Option<(Value, Vec<Vec<f32>>)>,
 }
 
 impl CodeSearch {
-    fn new(inv: &Inverter, gpu: &Gpu, prior: &PriorPreset, prior_weights: &[u8], views: &[ShapeView], codes: usize) -> Result<CodeSearch> {
+    fn new(inv: &Inverter, gpu: &Gpu, prior: &PriorPreset, prior_weights: &[u8], views: &[ShapeView], codes: usize, silhouette: bool) -> Result<CodeSearch> {
         let p = &inv.preset;
-        let wins: Vec<Window> = views.iter().map(|v| Ok(Window::around(p, &inv.foreground(v.image)?, inv.size))).collect::<Result<_>>()?;
+        let fgs: Vec<Vec<bool>> = views.iter().map(|v| inv.foreground(v.image)).collect::<Result<_>>()?;
+        let wins: Vec<Window> = fgs.iter().map(|fg| Window::around(p, fg, inv.size)).collect();
         let len = [0, 1].map(|a| wins.iter().map(|w| w.cam[2 + a]).max().unwrap_or(p.cam));
         let wins: Vec<Window> = wins.iter().map(|w| w.resized(p, len)).collect();
         let n = codes * views.len();
         let (mut net, code) = decoder_with_renderer(prior, p, Head::Phong(phong_of(&inv.head_light)), n, [len[0], len[1]])?;
         let [h, w] = wins[0].pixel_dims();
         let tv = net.graph.input("target.image", &[n, 3, h, w])?;
-        let loss = net.graph.apply("loss.shape", Op::Loss(Loss::Mse), &[net.image, tv])?;
+        let mut loss = net.graph.apply("loss.shape", Op::Loss(Loss::Mse), &[net.image, tv])?;
+        let mask_target = if silhouette {
+            let tm = net.graph.input("target.mask", &[n, 1, h, w])?;
+            let lm = net.graph.apply("loss.silhouette", Op::Loss(Loss::Mse), &[net.maps.expect("Phong head")[2], tm])?;
+            loss = net.graph.apply("loss.total", Op::Add, &[loss, lm])?;
+            Some(tm)
+        } else {
+            None
+        };
         let mut ex = Executor::new(gpu, net.graph.clone(), 0)?;
         ex.load_params_parts(gpu, &[(&inv.weights, &inv.name, ""), (prior_weights, "prior", "dec.")])?;
         ex.training = false;
@@ -107,7 +121,17 @@ impl CodeSearch {
         let light = |v: usize| camera::light_values(&Light { azimuth: views[v].light.azimuth, elevation: views[v].light.elevation, ..inv.head_light }).to_vec();
         ex.feed(gpu, net.light.expect("Phong head"), &each(&light))?;
         ex.feed(gpu, tv, &each(&|v| targets[v].clone()))?;
-        Ok(CodeSearch { net, ex, code, loss, latent: prior.latent, views: views.len(), codes, targets })
+        let masks = match mask_target {
+            Some(tm) => {
+                let m: Vec<Vec<f32>> = fgs.iter().zip(&wins).map(|(fg, w)| w.crop_mask(fg, inv.size).into_iter().map(|b| b as u8 as f32).collect()).collect();
+                ex.feed(gpu, tm, &each(&|v| m[v].clone()))?;
+                let mv = net.maps.expect("Phong head")[2];
+                ex.keep(mv);
+                Some((mv, m))
+            }
+            None => None,
+        };
+        Ok(CodeSearch { net, ex, code, loss, latent: prior.latent, views: views.len(), codes, targets, masks })
     }
 
     /// Renders up to `self.codes` codes at every view: each code's image MSE (mean over the
@@ -129,12 +153,22 @@ impl CodeSearch {
         }
         let img = self.ex.read(gpu, self.net.image)?;
         let g = if grad { self.ex.grad(gpu, self.code)? } else { Vec::new() };
+        let mask = match &self.masks {
+            Some((mv, m)) => Some((self.ex.read(gpu, *mv)?, m)),
+            None => None,
+        };
         let per = self.targets[0].len();
+        // Item k's loss: its image MSE, plus its silhouette MSE with the term.
+        let item = |k: usize| {
+            let v = k % self.views;
+            let sil = mask.as_ref().map_or(0.0, |(mk, m)| mse(&mk[k * m[v].len()..(k + 1) * m[v].len()], &m[v]));
+            mse(&img[k * per..(k + 1) * per], &self.targets[v]) + sil
+        };
         let n = (self.codes * self.views) as f64;
         Ok((0..codes.len())
             .map(|c| {
                 let items = c * self.views..(c + 1) * self.views;
-                let mse = items.clone().map(|k| mse(&img[k * per..(k + 1) * per], &self.targets[k % self.views])).sum::<f64>() / self.views as f64;
+                let mse = items.clone().map(item).sum::<f64>() / self.views as f64;
                 // The loss is the batch mean: a code's own mean over its views has n / views
                 // times the gradient its rows receive.
                 let gz = if grad {
@@ -204,7 +238,7 @@ impl Inverter {
         let penalty = |z: &[f32]| prior_term(z, stats.as_ref(), o.prior_weight);
         // Score every start in batches of about 8 renders.
         let per_batch = (8 / views.len()).clamp(1, starts.len());
-        let mut scorer = CodeSearch::new(self, gpu, prior, prior_weights, views, per_batch)?;
+        let mut scorer = CodeSearch::new(self, gpu, prior, prior_weights, views, per_batch, o.silhouette)?;
         let mut scored = Vec::with_capacity(starts.len());
         for chunk in starts.chunks(per_batch) {
             let refs: Vec<&[f32]> = chunk.iter().map(Vec::as_slice).collect();
@@ -215,7 +249,7 @@ impl Inverter {
         scored.sort_by(|a, b| a.0.total_cmp(&b.0));
         let start_grid = scorer.decode(gpu, &scored[0].1, prior.res)?;
         drop(scorer);
-        let mut search = CodeSearch::new(self, gpu, prior, prior_weights, views, 1)?;
+        let mut search = CodeSearch::new(self, gpu, prior, prior_weights, views, 1, o.silhouette)?;
         let mut best: Option<(f64, Vec<f32>, Vec<f64>)> = None;
         for (_, z0) in scored.into_iter().take(o.keep.max(1)) {
             let (loss, z, curve) = self.descend(gpu, &mut search, z0, &penalty, o)?;
