@@ -45,10 +45,10 @@ pub struct EvalShapeArgs {
     /// Adam's step on the code (which lives in 0..1).
     #[arg(long, default_value_t = ShapeOptions::default().lr)]
     lr: f64,
-    /// Add the silhouette to the loss: the MSE between the network's mask and the image's
-    /// foreground.
+    /// Leave the silhouette out of the loss (by default the MSE between the network's mask
+    /// and the image's foreground is added to the image MSE).
     #[arg(long)]
-    silhouette: bool,
+    no_silhouette: bool,
     /// Search each image's camera and light too (one view per shape; `invert --prior`'s
     /// alternation, with its default search) instead of taking the dataset's.
     #[arg(long)]
@@ -67,7 +67,7 @@ pub fn run(a: EvalShapeArgs) -> Result<()> {
     let ds = Dataset::open(&a.data)?;
     let (inv, name) = super::invert::dataset_inverter(&a.net, &ds)?;
     let (prior, prior_name) = super::prior::load_prior(a.prior.as_deref())?;
-    let o = ShapeOptions { steps: a.steps, lr: a.lr, start: None, candidates: a.candidates, keep: a.keep, prior_weight: a.prior_weight, silhouette: a.silhouette };
+    let o = ShapeOptions { steps: a.steps, lr: a.lr, start: None, candidates: a.candidates, keep: a.keep, prior_weight: a.prior_weight, silhouette: !a.no_silhouette };
     let pose = if a.unknown_pose { PoseSource::Searched { options: InvertOptions::default(), rounds: a.rounds } } else { PoseSource::Known };
     let bar = ProgressBar::new(a.samples as u64);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} shapes [{elapsed_precise}<{eta_precise}]").expect("static template"));

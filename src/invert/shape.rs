@@ -36,12 +36,13 @@ pub struct ShapeOptions {
     pub prior_weight: f64,
     /// Add the MSE between the network's mask and the images' foreground (pixels brighter
     /// than `metrics::FOREGROUND`) to the loss: the silhouette, weighted like the shading.
+    /// On 16 held-out chairs it took the voxel IoU from 0.407 to 0.561 (README).
     pub silhouette: bool,
 }
 
 impl Default for ShapeOptions {
     fn default() -> Self {
-        ShapeOptions { steps: 40, lr: 0.02, start: None, candidates: 64, keep: 2, prior_weight: 1e-3, silhouette: false }
+        ShapeOptions { steps: 40, lr: 0.02, start: None, candidates: 64, keep: 2, prior_weight: 1e-3, silhouette: true }
     }
 }
 
