@@ -68,13 +68,13 @@ pub struct ShapeEstimate {
     /// The decoded grid of the start that scored best before any descent.
     pub start_grid: VoxelGrid,
     /// The winning start's loss (image MSE over the windows around the images' foreground,
-    /// plus the code's prior term) after each step, best so far.
+    /// plus the silhouette and code prior terms where enabled) after each step, best so far.
     pub curve: Vec<f64>,
 }
 
 /// The prior's decoder in front of a frozen RenderNet for `codes` codes at a time, each
 /// rendered at every view (item `c * views + v`), with the image MSE against the views'
-/// images.
+/// images (plus, with the silhouette term, the mask MSE against their foregrounds).
 struct CodeSearch {
     net: RenderNet,
     ex: Executor,
@@ -370,7 +370,8 @@ pub struct ShapeError {
     /// The same for the mean code (0.5 everywhere without code statistics): what the prior
     /// gives without the image.
     pub iou_start: f64,
-    /// Final loss (image MSE over the search windows plus the code's prior term).
+    /// Final loss (image MSE over the search windows plus the silhouette and code prior
+    /// terms where enabled).
     pub loss: f64,
     /// With the pose searched: the angles in degrees between the true and recovered camera
     /// directions and light directions.
