@@ -173,6 +173,74 @@ fn conv_fast_forward_tex(ids: LaneIds) {
     put_row(n, co, pos + 7u * p.ysh, ow, oh0 + 7u, a7);
 }
 
+// ---- forward, narrow (co <= 4): a subgroup = 8 outputs along W; each lane 8 rows x 4 channels --
+// The heads (16->3, 16->1) and the prior's output conv (8->1) would use 3/16 or 1/16 of the
+// 16-channel tile above. Same weight texture (only its o4 = 0 texels are read): lanes l and
+// l + 4 fetch the texel of input channel 4q + l % 4, and 4 shuffles broadcast them.
+fn mac4(a: vec4<f32>, x: vec4<f32>, w0: vec4<f32>, w1: vec4<f32>, w2: vec4<f32>, w3: vec4<f32>) -> vec4<f32> {
+    return a + x.x * w0 + x.y * w1 + x.z * w2 + x.w * w3;
+}
+
+fn put4(n: u32, pos: u32, ow: u32, oh: u32, a: vec4<f32>) {
+    if (oh < p.oh) { put(n, 0u, pos, ow, a); }
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_forward_tex4(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    let t = tl.x;
+    if (t >= p.total) { return; }
+    let lane = tl.y;
+    let base = tl.z;
+    let wblocks = (p.ow + 7u) / 8u;
+    let hblocks = (p.oh + 7u) / 8u;
+    var r = t;
+    let wb = r % wblocks; r /= wblocks;
+    let hb = r % hblocks; r /= hblocks;
+    let od = r % p.od;
+    let n = r / p.od;
+    let ow = wb * 8u + lane;
+    let oh0 = hb * 8u;
+    let cq = p.cpad / 4u;
+    var a0 = vec4<f32>(0.0);
+    var a1 = a0; var a2 = a0; var a3 = a0; var a4 = a0; var a5 = a0; var a6 = a0; var a7 = a0;
+    for (var kd = 0u; kd < p.kd; kd++) {
+        let zd = i32(od * p.sd + kd) - i32(p.pd);
+        if (zd < 0 || zd >= i32(p.id)) { continue; }
+        for (var kh = 0u; kh < p.kh; kh++) {
+            let zh = i32(oh0 * p.sh + kh) - i32(p.ph);
+            let zsh = i32(p.sh);
+            for (var kw = 0u; kw < p.kw; kw++) {
+                let zw = i32(ow * p.sw + kw) - i32(p.pw);
+                let tap = (kd * p.kh + kh) * p.kw + kw;
+                for (var q = 0u; q < cq; q++) {
+                    let wa = textureLoad(tw, vec2<i32>(i32((lane & 3u) * 4u), i32(tap * cq + q)), 0);
+                    let w0 = subgroupShuffle(wa, base); let w1 = subgroupShuffle(wa, base + 1u);
+                    let w2 = subgroupShuffle(wa, base + 2u); let w3 = subgroupShuffle(wa, base + 3u);
+                    a0 = mac4(a0, tex_x(n, q, u32(zd), zh, zw), w0, w1, w2, w3);
+                    a1 = mac4(a1, tex_x(n, q, u32(zd), zh + zsh, zw), w0, w1, w2, w3);
+                    a2 = mac4(a2, tex_x(n, q, u32(zd), zh + 2 * zsh, zw), w0, w1, w2, w3);
+                    a3 = mac4(a3, tex_x(n, q, u32(zd), zh + 3 * zsh, zw), w0, w1, w2, w3);
+                    a4 = mac4(a4, tex_x(n, q, u32(zd), zh + 4 * zsh, zw), w0, w1, w2, w3);
+                    a5 = mac4(a5, tex_x(n, q, u32(zd), zh + 5 * zsh, zw), w0, w1, w2, w3);
+                    a6 = mac4(a6, tex_x(n, q, u32(zd), zh + 6 * zsh, zw), w0, w1, w2, w3);
+                    a7 = mac4(a7, tex_x(n, q, u32(zd), zh + 7 * zsh, zw), w0, w1, w2, w3);
+                }
+            }
+        }
+    }
+    if (ow >= p.ow) { return; }
+    let pos = p.yoff + od * p.ysd + oh0 * p.ysh + ow * p.ysw;
+    put4(n, pos, ow, oh0, a0);
+    put4(n, pos + p.ysh, ow, oh0 + 1u, a1);
+    put4(n, pos + 2u * p.ysh, ow, oh0 + 2u, a2);
+    put4(n, pos + 3u * p.ysh, ow, oh0 + 3u, a3);
+    put4(n, pos + 4u * p.ysh, ow, oh0 + 4u, a4);
+    put4(n, pos + 5u * p.ysh, ow, oh0 + 5u, a5);
+    put4(n, pos + 6u * p.ysh, ow, oh0 + 6u, a6);
+    put4(n, pos + 7u * p.ysh, ow, oh0 + 7u, a7);
+}
+
 // ---- backward weight: lanes = 8 (tap, input channel quad) pairs; dy shared by shuffles ----
 // One subgroup of 8 lanes per (group of 8 pairs, output channel group of 16, chunk of output
 // rows). Lane L owns pair L = tap * cq + q and accumulates dw[16 channels][4 channels] of it
@@ -270,5 +338,67 @@ fn conv_fast_backward_weight_tex(ids: LaneIds) {
         bpart[o + copad + k] = v.y;
         bpart[o + 2u * copad + k] = v.z;
         bpart[o + 3u * copad + k] = v.w;
+    }
+}
+
+// ---- backward weight, narrow (co <= 4): as above with one dy texel per position ----------
+// dy packed with 4 channels (one quad per voxel); each lane accumulates dw[4 channels][4
+// channels] of its (tap, quad) pair; part keeps the 16-column layout (columns 0..3 written).
+struct Acc4 { a0: vec4<f32>, a1: vec4<f32>, a2: vec4<f32>, a3: vec4<f32> }
+
+fn bw_step4(acc: Acc4, x: vec4<f32>, g: vec4<f32>, j: u32) -> Acc4 {
+    let d = subgroupShuffle(g, j);
+    return Acc4(acc.a0 + d.x * x, acc.a1 + d.y * x, acc.a2 + d.z * x, acc.a3 + d.w * x);
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_backward_weight_tex4(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    let t = tl.x;
+    if (t >= p.total) { return; }
+    let lane = tl.y;
+    let base = tl.z;
+    let taps = p.kd * p.kh * p.kw;
+    let cq = p.cpad / 4u;
+    let groups = (taps * cq + 7u) / 8u;
+    let grp = t % groups;
+    let chunk = t / groups;
+    let pair = grp * 8u + lane;
+    let tap = min(pair / cq, taps - 1u);
+    let q = pair % cq;
+    let k = tap_axes(tap);
+    let span = chunk_rows(chunk);
+    var acc = Acc4(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    for (var row = span.x; row < span.y; row++) {
+        let at = row_at(row, k);
+        let n = at.n;
+        let zd = at.zd;
+        let zh = at.zh;
+        for (var ow0 = 0u; ow0 < p.ow; ow0 += 8u) {
+            // Lane l fetches the dy texel at ow0 + l (zero past the row's end).
+            let mine = ow0 + lane;
+            let dc = vec3<i32>(i32(min(mine, p.ow - 1u)), i32(at.oh), i32(n * p.od + at.od));
+            let g = select(vec4<f32>(0.0), textureLoad(bdy, dc, 0), mine < p.ow);
+            let zw = i32(ow0 * p.sw + k.z) - i32(p.pw);
+            let s = i32(p.sw);
+            acc = bw_step4(acc, bw_x(n, q, zd, zh, zw), g, base);
+            acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + s), g, base + 1u);
+            acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 2 * s), g, base + 2u);
+            acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 3 * s), g, base + 3u);
+            acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 4 * s), g, base + 4u);
+            acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 5 * s), g, base + 5u);
+            acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 6 * s), g, base + 6u);
+            acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 7 * s), g, base + 7u);
+        }
+    }
+    if (pair >= taps * cq) { return; }
+    let o = ((chunk * taps + tap) * p.cpad + 4u * q) * 16u;
+    let a = array<vec4<f32>, 4>(acc.a0, acc.a1, acc.a2, acc.a3);
+    for (var c = 0u; c < 4u; c++) {
+        let v = a[c];
+        bpart[o + c] = v.x;
+        bpart[o + 16u + c] = v.y;
+        bpart[o + 32u + c] = v.z;
+        bpart[o + 48u + c] = v.w;
     }
 }

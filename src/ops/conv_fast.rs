@@ -247,7 +247,8 @@ fn pack_w(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: &Tensor, te
 
 /// The tiled forward with parameters `p` (of the dispatch geometry, output layout included)
 /// on packed operands: per invocation 8 outputs along W x 16 output channels (buffers), or
-/// per subgroup of 8 lanes 8 outputs along W x 8 rows x 16 output channels (textures).
+/// per subgroup of 8 lanes 8 outputs along W x 8 rows x 16 output channels (textures; 4
+/// channels when there are no more).
 fn forward_packed(
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
@@ -263,7 +264,9 @@ fn forward_packed(
     if let Packed::Texture(..) = xp {
         let tiles = (p.n * p.co16 * p.od * p.oh.div_ceil(8) * p.ow.div_ceil(8)) as usize;
         let p = Params { total: tiles as u32, ..p };
-        return gpu.dispatch(pass, TEX_SHADER, "conv_fast_forward_tex", &p, &args, grid_1d(tiles as u64 * 8, 64)?);
+        // At most 4 output channels: the 4-channel tile (co16 = 1, so the same tile count).
+        let entry = if p.co <= 4 { "conv_fast_forward_tex4" } else { "conv_fast_forward_tex" };
+        return gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?);
     }
     let tiles = (p.n * p.co16 * p.od * p.oh * p.ow.div_ceil(8)) as usize;
     dispatch(gpu, pass, "conv_fast_forward", p, &args, tiles)
@@ -387,8 +390,10 @@ fn backward_weight_tex(
 ) -> Result<()> {
     let xp = pack_x(gpu, pass, g, f, x, cpad, true)?;
     // dy is packed as the texture kernels pack an input: dy's channels over the output extent.
+    // At most 4 channels: one quad per voxel and the 4-channel kernel (part keeps copad).
+    let narrow = g.co <= 4;
     let dy_geom = Geometry { ci: g.co, input: g.output, ..*g };
-    let dyp = pack_x(gpu, pass, &dy_geom, &Folded::none(dy_geom), dy, copad, true)?;
+    let dyp = pack_x(gpu, pass, &dy_geom, &Folded::none(dy_geom), dy, if narrow { 4 } else { copad }, true)?;
     let g = &f.g;
     let taps = volume(g.kernel);
     let groups = (taps * cpad / 4).div_ceil(8) * (copad / 16);
@@ -402,7 +407,8 @@ fn backward_weight_tex(
     let tiles = nchunks * groups;
     let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, total: tiles as u32, ..params(g, cpad) };
     let args = [xp.arg(), dyp.arg(), Arg::W(&part)];
-    gpu.dispatch(pass, TEX_SHADER, "conv_fast_backward_weight_tex", &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
+    let entry = if narrow { "conv_fast_backward_weight_tex4" } else { "conv_fast_backward_weight_tex" };
+    gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
     dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
 }
 
