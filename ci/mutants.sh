@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Proves the tests can fail: applies each mutation in ci/mutants.txt (one per line:
-# file | sed expression | test target [test-name filter]), runs that test, and fails if a
-# mutation survives or no longer applies.
+# file | sed expression | test target [test-name filter]; target "lib" = the unit tests),
+# runs that test, and fails if a mutation survives or no longer applies.
 # - Shader mutants are applied to a copy of shaders/ that RENDERNET_SHADER_DIR points at, so
 #   they need no rebuild: all of them run every time.
 # - Rust mutants edit the file in place and rebuild. MUTANTS_RUST=all (default) runs every
@@ -37,13 +37,15 @@ while read -r line; do
         cp "$file" "$work/original"; backup=$file
         target_file=$file; original="$work/original"; env=()
     fi
+    # Target "lib": the library's own unit tests.
+    if [[ "$target" == lib ]]; then sel=(--lib); else sel=(--test "$target"); fi
     sed -i "$expr" "$target_file"
     if cmp -s "$target_file" "$original"; then
         echo "NOT APPLIED  $file: $expr"; failed=1
-    elif [[ -n "$backup" ]] && ! cargo test -q --no-run --test "$target" >/dev/null 2>&1; then
+    elif [[ -n "$backup" ]] && ! cargo test -q --no-run "${sel[@]}" >/dev/null 2>&1; then
         # A mutant that does not compile proves nothing about the tests.
         echo "NO BUILD     $file: $expr"; failed=1
-    elif env "${env[@]}" cargo test -q --test "$target" -- $filter >/dev/null 2>&1; then
+    elif env "${env[@]}" cargo test -q "${sel[@]}" -- $filter >/dev/null 2>&1; then
         echo "SURVIVED     $file: $expr ($test)"; failed=1
     else
         echo "caught       $file: $expr ($test)"; caught=$((caught + 1))
