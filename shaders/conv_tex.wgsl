@@ -106,6 +106,20 @@ fn lane_tile(i: LaneIds) -> vec3<u32> {
     return vec3<u32>((i.wg.x + i.wg.y * i.nwg.x) * 8u + i.li / 8u, i.sid & 7u, i.sid & ~7u);
 }
 
+// Forward tile `t` (tiles of 8 columns x 8 rows, per item, channel group and depth): item n,
+// output channel group cg, depth od, first row oh0, and lane `lane`'s column ow.
+struct FwdTile { n: u32, cg: u32, od: u32, oh0: u32, ow: u32 }
+
+fn fwd_tile(t: u32, lane: u32) -> FwdTile {
+    let wblocks = (p.ow + 7u) / 8u;
+    let hblocks = (p.oh + 7u) / 8u;
+    var r = t;
+    let wb = r % wblocks; r /= wblocks;
+    let hb = r % hblocks; r /= hblocks;
+    let od = r % p.od; r /= p.od;
+    return FwdTile(r / p.co16, r % p.co16, od, hb * 8u, wb * 8u + lane);
+}
+
 @compute @workgroup_size(64)
 fn conv_fast_forward_tex(ids: LaneIds) {
     let tl = lane_tile(ids);
@@ -113,16 +127,8 @@ fn conv_fast_forward_tex(ids: LaneIds) {
     if (t >= p.total) { return; }
     let lane = tl.y;
     let base = tl.z;
-    let wblocks = (p.ow + 7u) / 8u;
-    let hblocks = (p.oh + 7u) / 8u;
-    var r = t;
-    let wb = r % wblocks; r /= wblocks;
-    let hb = r % hblocks; r /= hblocks;
-    let od = r % p.od; r /= p.od;
-    let cg = r % p.co16;
-    let n = r / p.co16;
-    let ow = wb * 8u + lane;
-    let oh0 = hb * 8u;
+    let ft = fwd_tile(t, lane);
+    let n = ft.n; let cg = ft.cg; let od = ft.od; let oh0 = ft.oh0; let ow = ft.ow;
     let cq = p.cpad / 4u;
     var a0 = Acc(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
     var a1 = a0; var a2 = a0; var a3 = a0; var a4 = a0; var a5 = a0; var a6 = a0; var a7 = a0;
@@ -192,15 +198,9 @@ fn conv_fast_forward_tex4(ids: LaneIds) {
     if (t >= p.total) { return; }
     let lane = tl.y;
     let base = tl.z;
-    let wblocks = (p.ow + 7u) / 8u;
-    let hblocks = (p.oh + 7u) / 8u;
-    var r = t;
-    let wb = r % wblocks; r /= wblocks;
-    let hb = r % hblocks; r /= hblocks;
-    let od = r % p.od;
-    let n = r / p.od;
-    let ow = wb * 8u + lane;
-    let oh0 = hb * 8u;
+    // co16 = 1: channel group 0.
+    let ft = fwd_tile(t, lane);
+    let n = ft.n; let od = ft.od; let oh0 = ft.oh0; let ow = ft.ow;
     let cq = p.cpad / 4u;
     var a0 = vec4<f32>(0.0);
     var a1 = a0; var a2 = a0; var a3 = a0; var a4 = a0; var a5 = a0; var a6 = a0; var a7 = a0;
@@ -276,6 +276,19 @@ fn bw_x(n: u32, q: u32, zd: i32, zh: i32, zw: i32) -> vec4<f32> {
     return select(vec4<f32>(0.0), textureLoad(bx, c, 0), inside);
 }
 
+// Weight-gradient tile `t` (groups of 8 (tap, channel quad) pairs, per output channel group
+// and chunk of rows): lane `lane`'s pair (tap clamped for lanes past the last pair).
+struct BwPair { chunk: u32, cg: u32, pair: u32, tap: u32, q: u32 }
+
+fn bw_pair(t: u32, lane: u32) -> BwPair {
+    let taps = p.kd * p.kh * p.kw;
+    let cq = p.cpad / 4u;
+    let groups = (taps * cq + 7u) / 8u;
+    let r = t / groups;
+    let pair = (t % groups) * 8u + lane;
+    return BwPair(r / p.co16, r % p.co16, pair, min(pair / cq, taps - 1u), pair % cq);
+}
+
 @compute @workgroup_size(64)
 fn conv_fast_backward_weight_tex(ids: LaneIds) {
     let tl = lane_tile(ids);
@@ -285,15 +298,9 @@ fn conv_fast_backward_weight_tex(ids: LaneIds) {
     let base = tl.z;
     let taps = p.kd * p.kh * p.kw;
     let cq = p.cpad / 4u;
-    let groups = (taps * cq + 7u) / 8u;
-    var r = t;
-    let grp = r % groups; r /= groups;
-    let cg = r % p.co16;
-    let chunk = r / p.co16;
-    let pair = grp * 8u + lane;
-    let live = pair < taps * cq;
-    let tap = min(pair / cq, taps - 1u);
-    let q = pair % cq;
+    let bp = bw_pair(t, lane);
+    let cg = bp.cg; let chunk = bp.chunk; let tap = bp.tap; let q = bp.q;
+    let live = bp.pair < taps * cq;
     let k = tap_axes(tap);
     let kw = k.z;
     let span = chunk_rows(chunk);
@@ -360,12 +367,9 @@ fn conv_fast_backward_weight_tex4(ids: LaneIds) {
     let base = tl.z;
     let taps = p.kd * p.kh * p.kw;
     let cq = p.cpad / 4u;
-    let groups = (taps * cq + 7u) / 8u;
-    let grp = t % groups;
-    let chunk = t / groups;
-    let pair = grp * 8u + lane;
-    let tap = min(pair / cq, taps - 1u);
-    let q = pair % cq;
+    // co16 = 1: channel group 0.
+    let bp = bw_pair(t, lane);
+    let chunk = bp.chunk; let pair = bp.pair; let tap = bp.tap; let q = bp.q;
     let k = tap_axes(tap);
     let span = chunk_rows(chunk);
     var acc = Acc4(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));

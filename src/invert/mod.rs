@@ -12,6 +12,7 @@
 //! op. The start with the lowest final MSE wins.
 
 mod shape;
+mod starts;
 pub use shape::{JointEstimate, PoseSource, ShapeError, ShapeEstimate, ShapeOptions, ShapeView, decode_codes, evaluate_shapes};
 
 use crate::error::{Error, Result};
@@ -23,6 +24,7 @@ use crate::nn::rendernet::{Head, Preset, RenderNet, phong_of};
 use crate::ops::loss::Loss;
 use crate::reference::{Image, Light, View};
 use crate::voxel::VoxelGrid;
+use starts::{LIGHT_STARTS, POLISHED, POOLED, distinct_lights, light_grid, with_twins};
 
 /// Search settings.
 #[derive(Clone, Debug)]
@@ -66,40 +68,6 @@ const RADIUS: (f64, f64) = (2.0, 9.0);
 /// Coarse starts re-scored at their own radius (silhouette IoU at the mid radius already
 /// ranks views well; this bounds the second pass's cost).
 const RESCORED: usize = 16;
-/// Light directions tried at every kept start, `(azimuth, elevation)` relative to the camera
-/// (degrees): the training lights' range (azimuth any, elevation 20..160) in 12 directions.
-const LIGHT_STARTS: [(f64, f64); 12] = [
-    (0.0, 45.0), (90.0, 45.0), (180.0, 45.0), (270.0, 45.0),
-    (0.0, 90.0), (90.0, 90.0), (180.0, 90.0), (270.0, 90.0),
-    (0.0, 135.0), (90.0, 135.0), (180.0, 135.0), (270.0, 135.0),
-];
-/// Light directions of the polish after the refinement: azimuth every 20 degrees, elevation
-/// 10..170 every 20 (162 directions, in the same frame as [`LIGHT_STARTS`]).
-fn light_grid() -> Vec<(f64, f64)> {
-    (0..9).flat_map(|e| (0..18).map(move |a| (20.0 * a as f64, 10.0 + 20.0 * e as f64))).collect()
-}
-
-/// The first `n` of `ranked` (best first) whose lights are at least 30 degrees from every
-/// light already taken: the network's light optimum is shallow, so the best few grid
-/// lights are often neighbours of one another.
-fn distinct_lights(ranked: impl Iterator<Item = Vars>, n: usize) -> Vec<Vars> {
-    let mut out: Vec<Vars> = Vec::new();
-    for v in ranked {
-        let dir = polar_unit(v.0[3], v.0[4]);
-        let far = |r: &Vars| polar_unit(r.0[3], r.0[4]).iter().zip(&dir).map(|(a, b)| a * b).sum::<f64>() < 30f64.to_radians().cos();
-        if out.len() < n && out.iter().all(far) {
-            out.push(v);
-        }
-    }
-    out
-}
-
-/// Lights refined by the polish after the refinement.
-const POLISHED: usize = 4;
-
-/// Views per kept start scored by image MSE (with their best light start) before the
-/// refinement keeps the best `keep` of them.
-const POOLED: usize = 3;
 /// Radius of the coarse silhouette pass, mid-range of the training views.
 const COARSE_RADIUS: f64 = 4.65;
 
@@ -397,32 +365,6 @@ impl Inverter {
     }
 }
 
-/// The `keep` starts to refine, from `ranked` (best silhouette first): each followed by its
-/// twin seen from the opposite side (azimuth + 180 degrees), unless a kept start is already
-/// within 30 degrees of it. A left-right symmetric object (most chairs) casts nearly the same
-/// silhouette from the front and from the back, so the silhouette score cannot tell them
-/// apart; the refinement's image loss (shading) can, if both are among its starts.
-fn with_twins(ranked: impl Iterator<Item = Vars>, keep: usize) -> Vec<Vars> {
-    let mut out: Vec<Vars> = Vec::new();
-    let near = |a: &Vars, b: &Vars| {
-        let (u, v) = (polar_unit(a.0[0], a.0[1]), polar_unit(b.0[0], b.0[1]));
-        u.iter().zip(&v).map(|(x, y)| x * y).sum::<f64>() > 30f64.to_radians().cos()
-    };
-    for v in ranked {
-        let mut twin = v;
-        twin.0[0] = (v.0[0] + 180.0) % 360.0;
-        for c in [v, twin] {
-            if out.len() < keep && !out.iter().any(|k| near(k, &c)) {
-                out.push(c);
-            }
-        }
-        if out.len() == keep {
-            break;
-        }
-    }
-    out
-}
-
 /// The part of the camera grid a search renders: the target's foreground box grown by
 /// [`WINDOW_MARGIN`] camera voxels, sides rounded up to multiples of 4 (what the strides
 /// need) and clamped to the grid. Empty space costs nothing: a bunny at radius 3.3 needs
@@ -626,50 +568,4 @@ pub fn evaluate(
         progress(k + 1, n);
     }
     Ok(out)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn v(az: f64, el: f64) -> Vars {
-        Vars([az, el, 1.0, 30.0, 60.0])
-    }
-
-    /// The best start is followed by its opposite-side twin; near-duplicates (of a start or
-    /// of a twin) are skipped, so the kept starts cover distinct views.
-    #[test]
-    fn kept_starts_pair_each_view_with_its_opposite_side() {
-        let ranked = [v(30.0, 70.0), v(40.0, 70.0), v(210.0, 72.0), v(120.0, 90.0), v(300.0, 45.0)];
-        let kept: Vec<[f64; 2]> = with_twins(ranked.into_iter(), 4).iter().map(|k| [k.0[0], k.0[1]]).collect();
-        assert_eq!(kept, [[30.0, 70.0], [210.0, 70.0], [120.0, 90.0], [300.0, 90.0]]);
-        assert_eq!(with_twins(ranked.into_iter(), 1).len(), 1);
-    }
-
-    /// The polish's lights: best first, neighbours within 30 degrees of a taken one skipped
-    /// (20 degrees apart at the equator is a neighbour; 40 is not), at most `n`.
-    #[test]
-    fn polish_takes_the_best_lights_at_least_30_degrees_apart() {
-        let l = |az: f64, el: f64| Vars([0.0, 90.0, 1.0, az, el]);
-        let ranked = [l(0.0, 90.0), l(20.0, 90.0), l(40.0, 90.0), l(0.0, 110.0), l(180.0, 30.0), l(90.0, 90.0)];
-        let got: Vec<[f64; 2]> = distinct_lights(ranked.into_iter(), 3).iter().map(|k| [k.0[3], k.0[4]]).collect();
-        assert_eq!(got, [[0.0, 90.0], [40.0, 90.0], [180.0, 30.0]]);
-        assert_eq!(distinct_lights(ranked.into_iter(), 1).len(), 1);
-    }
-
-    /// The polish's grid leaves no direction more than 15 degrees from one of its lights
-    /// (20-degree steps: at most ~14 degrees at the equator's cell centres).
-    #[test]
-    fn light_grid_covers_every_direction() {
-        let grid: Vec<[f64; 3]> = light_grid().iter().map(|&(az, el)| polar_unit(az, el)).collect();
-        assert_eq!(grid.len(), 162);
-        for i in 0..400 {
-            // Fibonacci sphere: near-uniform test directions.
-            let y = 1.0 - 2.0 * (i as f64 + 0.5) / 400.0;
-            let (r, phi) = ((1.0 - y * y).sqrt(), i as f64 * 2.399_963);
-            let d = [r * phi.cos(), y, r * phi.sin()];
-            let best = grid.iter().map(|g| g.iter().zip(&d).map(|(a, b)| a * b).sum::<f64>()).fold(-1.0, f64::max);
-            assert!(best.clamp(-1.0, 1.0).acos().to_degrees() < 15.0, "direction {d:?} is {:.1} degrees from the grid", best.acos().to_degrees());
-        }
-    }
 }
