@@ -35,8 +35,8 @@ pub struct InvertArgs {
     /// Elevation starts of the coarse search (evenly spaced inside 0..180).
     #[arg(long, default_value_t = InvertOptions::default().elevations)]
     elevations: usize,
-    /// Starts refined by gradient descent: the views (3 times as many, twins included, each
-    /// with its best of 12 light starts) with the lowest image MSE.
+    /// Starts refined by gradient descent: the coarse views (and their opposite-side twins),
+    /// each with its best of 12 light starts, with the lowest image MSE.
     #[arg(long, default_value_t = InvertOptions::default().keep)]
     starts: usize,
     /// Gradient steps of the refinement (the light polish after it takes half as many).

@@ -33,13 +33,9 @@ pub(super) fn distinct_lights(ranked: impl Iterator<Item = Vars>, n: usize) -> V
 /// Lights refined by the polish after the refinement.
 pub(super) const POLISHED: usize = 4;
 
-/// Views per kept start scored by image MSE (with their best light start) before the
-/// refinement keeps the best `keep` of them.
-pub(super) const POOLED: usize = 3;
-
-/// The `keep` starts to refine, from `ranked` (best silhouette first): each followed by its
-/// twin seen from the opposite side (azimuth + 180 degrees), unless a kept start is already
-/// within 30 degrees of it. A left-right symmetric object (most chairs) casts nearly the same
+/// Up to `keep` views from `ranked` (best silhouette first): each followed by its twin seen
+/// from the opposite side (azimuth + 180 degrees), unless a kept view is already within 30
+/// degrees of it. A left-right symmetric object (most chairs) casts nearly the same
 /// silhouette from the front and from the back, so the silhouette score cannot tell them
 /// apart; the refinement's image loss (shading) can, if both are among its starts.
 pub(super) fn with_twins(ranked: impl Iterator<Item = Vars>, keep: usize) -> Vec<Vars> {
