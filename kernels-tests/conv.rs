@@ -304,12 +304,15 @@ fn fast_backward_input_by_phase() {
 }
 
 /// The tiled kernels at channel counts that are not multiples of their tile (inputs padded to
-/// 4, outputs to 16 with zeros): 1, 2, 3, 5 in and 1, 3, 5 out, conv and transposed, including
-/// the first layer's shape (3D, 1 input channel, 5^3 stride 2) and the 1- and 3-channel heads.
+/// 4, outputs to 16 with zeros; the texture family's 4- and 8-channel tiles): 1, 2, 3, 4, 5 in
+/// and 1, 3, 5, 7, 8 out, conv and transposed, including the first layer's shapes (3D, 1 or 4
+/// input channels to 8, 5^3 stride 2) and the 1- and 3-channel heads.
 #[test]
 fn fast_small_channel_counts_forward_and_gradients() {
     let with = |c: Case, ci: usize, co: usize| Case { ci, co, ..c };
     check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 1, 3), 60);
+    check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 1, 8), 58);
+    check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 4, 7), 59);
     check_fast(with(conv3d([3, 3, 3], [2, 1, 1], Padding::Same), 2, 1), 61);
     check_fast(with(conv3d([3, 2, 3], [1, 2, 1], explicit([1, 0, 2], [0, 1, 1])), 5, 5), 62);
     check_fast(with(conv2d([3, 3], [1, 1], Padding::Same), 3, 1), 63);

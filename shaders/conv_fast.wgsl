@@ -98,24 +98,36 @@ fn conv_fast_pack_input(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(
 // and no padding on the folded axes (src/ops/conv_fast.rs builds its geometry). Params: n,
 // ci = C, id/ih/iw source, od/oh/ow destination (od = id), kh/kw fold sizes, sh/sw and
 // ph/pw the folded axes' stride and padding (1 and 0 with fold size 1: the axis is copied).
-fn folded_at(n: u32, c: u32, d: u32, h0: i32, w0: i32) -> f32 {
-    let f = p.kh * p.kw;
-    let b = c % f;
-    let h = h0 + i32(b / p.kw);
-    let w = w0 + i32(b % p.kw);
-    let ok = c < p.ci * f && h >= 0 && h < i32(p.ih) && w >= 0 && w < i32(p.iw);
+// A folded channel as the counter (c, a, b): source channel, fold row, fold column of
+// c' = (c * kh + a) * kw + b. Packings walk it with fold_next instead of dividing c' (integer
+// division by a runtime value is scalarised per lane on llvmpipe: four per value made the
+// first layer's packing cost as much as its conv).
+fn fold_next(k: vec3<u32>) -> vec3<u32> {
+    let wb = k.z + 1u == p.kw;
+    let a = select(k.y, k.y + 1u, wb);
+    let wa = a == p.kh;
+    return vec3<u32>(select(k.x, k.x + 1u, wa), select(a, 0u, wa), select(k.z + 1u, 0u, wb));
+}
+
+// The value of folded channel k of destination voxel (n, d) whose folded window starts at
+// (h0, w0): x[c, h0 + a, w0 + b], zero past the channels or off the grid.
+fn folded_at(n: u32, k: vec3<u32>, d: u32, h0: i32, w0: i32) -> f32 {
+    let h = h0 + i32(k.y);
+    let w = w0 + i32(k.z);
+    let ok = k.x < p.ci && h >= 0 && h < i32(p.ih) && w >= 0 && w < i32(p.iw);
     let hc = u32(clamp(h, 0, i32(p.ih) - 1));
     let wc = u32(clamp(w, 0, i32(p.iw) - 1));
-    let v = src[(((n * p.ci + min(c / f, p.ci - 1u)) * p.id + d) * p.ih + hc) * p.iw + wc];
+    let v = src[(((n * p.ci + min(k.x, p.ci - 1u)) * p.id + d) * p.ih + hc) * p.iw + wc];
     return select(0.0, v, ok);
 }
 
-// Folded channels 4q..4q+3 of destination voxel (n, d) whose folded window starts at
-// (h0, w0); also used by conv_tex.wgsl's texture packing.
-fn folded_quad(n: u32, q: u32, d: u32, h0: i32, w0: i32) -> vec4<f32> {
-    let c = 4u * q;
-    return vec4<f32>(folded_at(n, c, d, h0, w0), folded_at(n, c + 1u, d, h0, w0),
-                     folded_at(n, c + 2u, d, h0, w0), folded_at(n, c + 3u, d, h0, w0));
+// The next 4 folded channels from counter *k (advanced past them) of destination voxel (n, d)
+// whose folded window starts at (h0, w0); also used by conv_tex.wgsl's texture packing.
+fn folded_quad(n: u32, k: ptr<function, vec3<u32>>, d: u32, h0: i32, w0: i32) -> vec4<f32> {
+    let k0 = *k; let k1 = fold_next(k0); let k2 = fold_next(k1); let k3 = fold_next(k2);
+    *k = fold_next(k3);
+    return vec4<f32>(folded_at(n, k0, d, h0, w0), folded_at(n, k1, d, h0, w0),
+                     folded_at(n, k2, d, h0, w0), folded_at(n, k3, d, h0, w0));
 }
 
 @compute @workgroup_size(64)
@@ -129,8 +141,9 @@ fn conv_fast_pack_folded(@builtin(global_invocation_id) gid: vec3<u32>, @builtin
     let h0 = i32(((s / p.ow) % p.oh) * p.sh) - i32(p.ph);
     let d = s / (p.ow * p.oh);
     let cq = p.cpad / 4u;
+    var k = vec3<u32>(0u);
     for (var q = 0u; q < cq; q++) {
-        dst[i * cq + q] = folded_quad(n, q, d, h0, w0);
+        dst[i * cq + q] = folded_quad(n, &k, d, h0, w0);
     }
 }
 

@@ -35,8 +35,9 @@ fn conv_fast_pack_folded_tex(@builtin(global_invocation_id) gid: vec3<u32>, @bui
     let w = s % p.ow;
     let h = (s / p.ow) % p.oh;
     let d = s / (p.ow * p.oh);
+    var k = vec3<u32>(0u);
     for (var q = 0u; q < p.cpad / 4u; q++) {
-        let v = folded_quad(n, q, d, i32(h * p.sh) - i32(p.ph), i32(w * p.sw) - i32(p.pw));
+        let v = folded_quad(n, &k, d, i32(h * p.sh) - i32(p.ph), i32(w * p.sw) - i32(p.pw));
         textureStore(tdst, tex_pos(n, q, d, h, w), v);
     }
 }
@@ -177,6 +178,74 @@ fn conv_fast_forward_tex(ids: LaneIds) {
     put_row(n, co, pos + 5u * p.ysh, ow, oh0 + 5u, a5);
     put_row(n, co, pos + 6u * p.ysh, ow, oh0 + 6u, a6);
     put_row(n, co, pos + 7u * p.ysh, ow, oh0 + 7u, a7);
+}
+
+// ---- forward, half width (co <= 8): a subgroup = 8 outputs along W; each lane 8 rows x 8 channels
+// The first 3D conv (1 or 4 -> 8) would use half of the 16-channel tile. Same weight texture
+// (only its o4 < 2 texels are read): lane l fetches the texel of input channel 4q + l / 2,
+// output quad l % 2, and 8 shuffles broadcast them.
+struct Acc8 { a0: vec4<f32>, a1: vec4<f32> }
+
+fn mac8(acc: Acc8, x: vec4<f32>, w: array<vec4<f32>, 8>) -> Acc8 {
+    return Acc8(acc.a0 + x.x * w[0] + x.y * w[2] + x.z * w[4] + x.w * w[6],
+                acc.a1 + x.x * w[1] + x.y * w[3] + x.z * w[5] + x.w * w[7]);
+}
+
+fn put_row8(n: u32, pos: u32, ow: u32, oh: u32, a: Acc8) {
+    if (oh >= p.oh) { return; }
+    put(n, 0u, pos, ow, a.a0); put(n, 4u, pos, ow, a.a1);
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_forward_tex8(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    let t = tl.x;
+    if (t >= p.total) { return; }
+    let lane = tl.y;
+    let base = tl.z;
+    // co16 = 1: channel group 0.
+    let ft = fwd_tile(t, lane);
+    let n = ft.n; let od = ft.od; let oh0 = ft.oh0; let ow = ft.ow;
+    let cq = p.cpad / 4u;
+    let wx = i32((lane / 2u) * 4u + (lane & 1u));
+    var a0 = Acc8(vec4<f32>(0.0), vec4<f32>(0.0));
+    var a1 = a0; var a2 = a0; var a3 = a0; var a4 = a0; var a5 = a0; var a6 = a0; var a7 = a0;
+    for (var kd = 0u; kd < p.kd; kd++) {
+        let zd = i32(od * p.sd + kd) - i32(p.pd);
+        if (zd < 0 || zd >= i32(p.id)) { continue; }
+        for (var kh = 0u; kh < p.kh; kh++) {
+            let zh = i32(oh0 * p.sh + kh) - i32(p.ph);
+            let zsh = i32(p.sh);
+            for (var kw = 0u; kw < p.kw; kw++) {
+                let zw = i32(ow * p.sw + kw) - i32(p.pw);
+                let tap = (kd * p.kh + kh) * p.kw + kw;
+                for (var q = 0u; q < cq; q++) {
+                    let wa = textureLoad(tw, vec2<i32>(wx, i32(tap * cq + q)), 0);
+                    let w = array<vec4<f32>, 8>(
+                        subgroupShuffle(wa, base), subgroupShuffle(wa, base + 1u), subgroupShuffle(wa, base + 2u), subgroupShuffle(wa, base + 3u),
+                        subgroupShuffle(wa, base + 4u), subgroupShuffle(wa, base + 5u), subgroupShuffle(wa, base + 6u), subgroupShuffle(wa, base + 7u));
+                    a0 = mac8(a0, tex_x(n, q, u32(zd), zh, zw), w);
+                    a1 = mac8(a1, tex_x(n, q, u32(zd), zh + zsh, zw), w);
+                    a2 = mac8(a2, tex_x(n, q, u32(zd), zh + 2 * zsh, zw), w);
+                    a3 = mac8(a3, tex_x(n, q, u32(zd), zh + 3 * zsh, zw), w);
+                    a4 = mac8(a4, tex_x(n, q, u32(zd), zh + 4 * zsh, zw), w);
+                    a5 = mac8(a5, tex_x(n, q, u32(zd), zh + 5 * zsh, zw), w);
+                    a6 = mac8(a6, tex_x(n, q, u32(zd), zh + 6 * zsh, zw), w);
+                    a7 = mac8(a7, tex_x(n, q, u32(zd), zh + 7 * zsh, zw), w);
+                }
+            }
+        }
+    }
+    if (ow >= p.ow) { return; }
+    let pos = p.yoff + od * p.ysd + oh0 * p.ysh + ow * p.ysw;
+    put_row8(n, pos, ow, oh0, a0);
+    put_row8(n, pos + p.ysh, ow, oh0 + 1u, a1);
+    put_row8(n, pos + 2u * p.ysh, ow, oh0 + 2u, a2);
+    put_row8(n, pos + 3u * p.ysh, ow, oh0 + 3u, a3);
+    put_row8(n, pos + 4u * p.ysh, ow, oh0 + 4u, a4);
+    put_row8(n, pos + 5u * p.ysh, ow, oh0 + 5u, a5);
+    put_row8(n, pos + 6u * p.ysh, ow, oh0 + 6u, a6);
+    put_row8(n, pos + 7u * p.ysh, ow, oh0 + 7u, a7);
 }
 
 // ---- forward, narrow (co <= 4): a subgroup = 8 outputs along W; each lane 8 rows x 4 channels --

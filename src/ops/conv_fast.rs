@@ -264,8 +264,13 @@ fn forward_packed(
     if let Packed::Texture(..) = xp {
         let tiles = (p.n * p.co16 * p.od * p.oh.div_ceil(8) * p.ow.div_ceil(8)) as usize;
         let p = Params { total: tiles as u32, ..p };
-        // At most 4 output channels: the 4-channel tile (co16 = 1, so the same tile count).
-        let entry = if p.co <= 4 { "conv_fast_forward_tex4" } else { "conv_fast_forward_tex" };
+        // At most 4 or 8 output channels: the 4- or 8-channel tile (co16 = 1, so the same
+        // tile count).
+        let entry = match p.co {
+            ..=4 => "conv_fast_forward_tex4",
+            5..=8 => "conv_fast_forward_tex8",
+            _ => "conv_fast_forward_tex",
+        };
         return gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?);
     }
     let tiles = (p.n * p.co16 * p.od * p.oh * p.ow.div_ceil(8)) as usize;
