@@ -17,6 +17,11 @@ fn every_shader_parses_and_validates() {
         if let Some(other) = src.lines().next().and_then(|l| l.strip_prefix("// prepend: ")) {
             src = std::fs::read_to_string(dir.join(other.trim())).unwrap() + &src;
         }
+        // A file whose first line is `// append: WGSL` is completed at run time by a function
+        // (bench_operands.wgsl: one per kind of operand); validate it with the one given.
+        if let Some(tail) = src.lines().next().and_then(|l| l.strip_prefix("// append: ")) {
+            src = format!("{src}\n{tail}\n");
+        }
         let name = path.file_name().unwrap().to_string_lossy().to_string();
         match naga::front::wgsl::parse_str(&src) {
             Err(e) => failures.push(format!("{name}: {}", e.emit_to_string(&src))),

@@ -64,6 +64,32 @@ fn bench_json_reports_speed_against_the_same_run_ceiling() {
     }
 }
 
+/// `bench --operands --json`: one row per kind of operand, the plain FMA first with nothing
+/// beyond itself, every cost finite and positive, and each row's extra cost counted in
+/// ceiling FMAs by one same-run factor; with --filter it is refused (it times no kernels).
+#[test]
+fn bench_operands_prices_each_operand_against_the_fma() {
+    let out = rendernet().args(["bench", "--operands", "--json", "--repeat", "1"]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "bench --operands failed: {stderr}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("bench --operands --json prints JSON");
+    assert!(v["fma_ceiling_gflops"].as_f64().is_some_and(|c| c > 0.0), "{v}");
+    let rows = v["operands"].as_array().expect("operands");
+    assert_eq!(rows.len(), 11, "{v}");
+    let f = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k} in {r}"));
+    assert_eq!(rows[0]["operand"], "none (plain FMA)", "{v}");
+    assert_eq!(f(&rows[0], "extra_ns"), 0.0, "{v}");
+    let per_ns = f(&rows[1], "extra_in_fmas") / f(&rows[1], "extra_ns");
+    for r in rows {
+        assert!(f(r, "ns_per_vector") > 0.0, "{r}");
+        assert!((f(r, "ns_per_vector") - f(&rows[0], "ns_per_vector") - f(r, "extra_ns")).abs() < 1e-9, "{r}");
+        assert!((f(r, "extra_in_fmas") - f(r, "extra_ns") * per_ns).abs() < 1e-6 * f(r, "extra_in_fmas").abs().max(1.0), "{r}");
+    }
+    let refused = rendernet().args(["bench", "--operands", "--filter", "conv3d"]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success() && stderr.contains("--operands") && stderr.contains("--filter"), "{stderr}");
+}
+
 /// `bench --profile` times the whole-network rows; a filter that leaves them out is refused.
 #[test]
 fn bench_profile_needs_the_whole_network_rows() {

@@ -36,6 +36,13 @@ pub struct BenchArgs {
     /// where a forward or a training step spends its time.
     #[arg(long)]
     profile: bool,
+    /// Instead of the kernels, time what reading one operand costs beyond a plain FMA, per kind
+    /// (storage-buffer, uniform-buffer, texel and workgroup-memory loads with a per-lane or a
+    /// lane-uniform address, a subgroup shuffle, an integer division): on lavapipe this
+    /// changes several-fold with the driver and the CPU, and decides how a kernel should read
+    /// its operands.
+    #[arg(long, conflicts_with_all = ["filter", "kernel", "profile"])]
+    operands: bool,
 }
 
 /// Records one call of a case's kernel.
@@ -276,6 +283,9 @@ pub fn run(a: BenchArgs) -> Result<()> {
     }
     let gpu = Gpu::new()?;
     let clock = bench::default_clock(&gpu);
+    if a.operands {
+        return operands(&gpu, clock, a.repeat, a.json);
+    }
     let mut all = cases(&gpu, &a.kernel)?;
     if let Some(f) = &a.filter {
         all.retain(|c| c.op.contains(f.as_str()) || c.shape.contains(f.as_str()));
@@ -347,5 +357,35 @@ pub fn run(a: BenchArgs) -> Result<()> {
     } else {
         println!("FMA ceiling at the end of the run: {after:.1} GFLOP/s");
     }
+    Ok(())
+}
+
+/// `bench --operands`: the cost of each kind of operand beside the FMA ceiling and the CPU.
+fn operands(gpu: &Gpu, clock: Clock, repeat: usize, json: bool) -> Result<()> {
+    if !gpu.has_subgroups_of_8() {
+        return Err(rendernet::Error::Invalid("--operands times a subgroup shuffle, which this adapter lacks".into()));
+    }
+    let (cpu, ceiling) = (bench::cpu_model(), bench::fma_ceiling(gpu, clock, 5)?);
+    let costs = bench::operands::operand_costs(gpu, clock, repeat, ceiling)?;
+    if json {
+        let rows: Vec<_> = costs
+            .iter()
+            .map(|c| serde_json::json!({"operand": c.operand, "address": c.address, "ns_per_vector": finite(c.ns_per_vector),
+                                         "extra_ns": finite(c.extra_ns), "extra_in_fmas": finite(c.extra_in_fmas)}))
+            .collect();
+        let out = serde_json::json!({"adapter": gpu.info.name, "cpu": cpu, "fma_ceiling_gflops": finite(ceiling), "operands": rows});
+        println!("{}", serde_json::to_string_pretty(&out).map_err(|e| rendernet::Error::Invalid(e.to_string()))?);
+        return Ok(());
+    }
+    println!("adapter: {}\ncpu:     {}", gpu.info.name, cpu.as_deref().unwrap_or("unknown"));
+    println!("FMA ceiling (shaders/bench_fma.wgsl, best of 5): {ceiling:.1} GFLOP/s");
+    println!("One operand per FMA (shaders/bench_operands.wgsl), ns per 8-lane vector op over all CPU threads, best of {repeat}:");
+    println!("{:<34} {:<18} {:>9} {:>13} {:>16}", "operand", "address", "ns", "beyond FMA", "ceiling FMAs");
+    for c in &costs {
+        println!("{:<34} {:<18} {:>9.2} {:>13.2} {:>16.1}", c.operand, c.address, c.ns_per_vector, c.extra_ns, c.extra_in_fmas);
+    }
+    // What the loop itself costs: the plain FMA row against an FMA at the ceiling.
+    let ceiling_fma = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64 * 16.0 / ceiling;
+    println!("(a plain FMA in this loop, one per loop-carried value and iteration, costs {:.1} FMAs at the ceiling)", costs[0].ns_per_vector / ceiling_fma);
     Ok(())
 }

@@ -48,9 +48,10 @@ pub(crate) use wgsl;
 pub const SHADER_DIR_ENV: &str = "RENDERNET_SHADER_DIR";
 
 /// The WGSL text of `shader`: embedded, or read from [`SHADER_DIR_ENV`]'s folder. A file
-/// that cannot be read there is reported and the embedded text used.
+/// that cannot be read there is reported and the embedded text used. A module made at run
+/// time (no `files`) is always used as it is.
 fn source_of(shader: Shader) -> std::borrow::Cow<'static, str> {
-    let Some(dir) = std::env::var_os(SHADER_DIR_ENV) else { return shader.source.into() };
+    let Some(dir) = std::env::var_os(SHADER_DIR_ENV).filter(|_| !shader.files.is_empty()) else { return shader.source.into() };
     let mut text = String::new();
     for f in shader.files {
         match std::fs::read_to_string(std::path::Path::new(&dir).join(f)) {

@@ -1,6 +1,8 @@
 //! Kernel timing for `rendernet bench`: GPU timestamps around a pass of repeated dispatches
 //! where the device has them, wall time around submit + wait otherwise, median over repeats.
 
+pub mod operands;
+
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 
