@@ -79,7 +79,7 @@ pub fn operand_costs(gpu: &Gpu, clock: Clock, samples: usize, ceiling: f64) -> R
     let args = [Arg::W(&out), Arg::R(&buf), Arg::Texture(&tex, wgpu::TextureViewDimension::D2)];
     // Vector operations per call: 8 lanes a vector, 8 accumulators an iteration; threads add up.
     let vector_ops = total as f64 / 8.0 * iters as f64 * 8.0;
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+    let threads = cpu_threads();
     let mut ns = Vec::new();
     for kind in &KINDS {
         // Each kind is its own module (its pipeline is cached under its own name).
@@ -93,13 +93,22 @@ pub fn operand_costs(gpu: &Gpu, clock: Clock, samples: usize, ceiling: f64) -> R
         ns.push(ms * 1e6 * threads / vector_ops);
     }
     let fma = ns[0];
-    // Thread-nanoseconds of one vector FMA (8 lanes, 2 FLOPs each) at the ceiling.
-    let ceiling_fma = threads * 16.0 / ceiling;
+    let ceiling_fma = ceiling_fma_ns(ceiling);
     Ok(KINDS
         .iter()
         .zip(ns)
         .map(|(k, ns)| OperandCost { operand: k.operand, address: k.address, ns_per_vector: ns, extra_ns: ns - fma, extra_in_fmas: (ns - fma) / ceiling_fma })
         .collect())
+}
+
+/// Nanoseconds of one 8-lane vector FMA (2 FLOPs a lane) at an FMA ceiling of `ceiling`
+/// GFLOP/s, the CPU threads' time added up as in [`OperandCost::ns_per_vector`].
+pub fn ceiling_fma_ns(ceiling: f64) -> f64 {
+    cpu_threads() * 16.0 / ceiling
+}
+
+fn cpu_threads() -> f64 {
+    std::thread::available_parallelism().map_or(1, |n| n.get()) as f64
 }
 
 const SKELETON: &str = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/bench_operands.wgsl"));

@@ -385,7 +385,7 @@ fn operands(gpu: &Gpu, clock: Clock, repeat: usize, json: bool) -> Result<()> {
         println!("{:<34} {:<18} {:>9.2} {:>13.2} {:>16.1}", c.operand, c.address, c.ns_per_vector, c.extra_ns, c.extra_in_fmas);
     }
     // What the loop itself costs: the plain FMA row against an FMA at the ceiling.
-    let ceiling_fma = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64 * 16.0 / ceiling;
-    println!("(a plain FMA in this loop, one per loop-carried value and iteration, costs {:.1} FMAs at the ceiling)", costs[0].ns_per_vector / ceiling_fma);
+    let loop_fma = costs[0].ns_per_vector / bench::operands::ceiling_fma_ns(ceiling);
+    println!("(a plain FMA in this loop, one per loop-carried value and iteration, costs {loop_fma:.1} FMAs at the ceiling)");
     Ok(())
 }

@@ -5,8 +5,8 @@
 //! Strategy (the paper's, plus radius): a coarse grid of azimuth x elevation starts is
 //! scored by how well the network's predicted mask overlaps the image's foreground (light
 //! does not change a silhouette, so this search ignores it); each start's radius is then set
-//! from the ratio of silhouette areas (orthographic: area scales with `1 / radius^2`) and the
-//! best starts are re-scored. The survivors are refined together, one batch, by Adam on
+//! from the ratio of silhouette areas (orthographic: area scales with `1 / radius^2`) and
+//! every start is re-scored there. The survivors are refined together, one batch, by Adam on
 //! `(azimuth, elevation, ln radius, light azimuth, light elevation)` with the image MSE as
 //! loss; gradients reach the pose through the resampling op and the light through the Phong
 //! op. The start with the lowest final MSE wins.
@@ -231,23 +231,23 @@ impl Inverter {
         let base = Light::default();
         let (net, ex, _) = self.executor(gpu, o.azimuths, false, &win)?;
         let mut sil = (net, ex);
-        // Coarse pass: silhouettes at the mid radius, one elevation row per batch.
-        let mut scored: Vec<(f64, Vars)> = Vec::new();
+        // Coarse pass: silhouettes at the mid radius, one elevation row per batch, for each
+        // view's radius (its overlap is scored again at that radius below).
+        let mut starts: Vec<Vars> = Vec::new();
         for e in 0..o.elevations {
             let el = 180.0 * (e as f64 + 0.5) / o.elevations as f64;
             let row: Vec<Vars> = (0..o.azimuths)
                 .map(|a| Vars([360.0 * a as f64 / o.azimuths as f64, el, COARSE_RADIUS.ln(), base.azimuth, base.elevation]))
                 .collect();
-            for ((area, iou), mut v) in self.silhouettes(gpu, &mut sil, &gv, &fg, &row, &win)?.into_iter().zip(row) {
+            for ((area, _), mut v) in self.silhouettes(gpu, &mut sil, &gv, &fg, &row, &win)?.into_iter().zip(row) {
                 // Area scales with 1 / radius^2: the radius that matches the image's area.
                 v.0[2] = (COARSE_RADIUS * (area.max(1.0) / target_area).sqrt()).ln();
                 v.clamp();
-                scored.push((iou, v));
+                starts.push(v);
             }
         }
         // Re-score every coarse start at its own radius: the silhouette order decides which
         // of two near-duplicate views (within 30 degrees) the pool keeps.
-        let starts: Vec<Vars> = scored.iter().map(|s| s.1).collect();
         let mut rescored = Vec::new();
         for chunk in starts.chunks(o.azimuths) {
             for ((_, iou), v) in self.silhouettes(gpu, &mut sil, &gv, &fg, chunk, &win)?.into_iter().zip(chunk) {
