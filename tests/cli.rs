@@ -545,3 +545,36 @@ fn train_texture_trains_resumes_and_reports_psnr() {
     assert!(out.contains("step 4/4"), "{out}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `train --input N` trains reading grids at N^3 and records N in the weights (`input`);
+/// `Preset::for_weights` reads it back, a resume keeps it without the flag, and a weights
+/// file whose `input` is out of range is an error naming the field and the limit.
+#[test]
+fn train_input_side_is_recorded_kept_on_resume_and_checked() {
+    use rendernet::nn::rendernet::{MAX_INPUT, Preset};
+    let dir = scratch("input");
+    let (data, ckpt) = (dir.join("data"), dir.join("run.ckpt"));
+    let (d, c) = (data.to_str().unwrap(), ckpt.to_str().unwrap());
+    run_ok(&["dataset", "--count", "2", "--views", "1", "--res", "16", "--image", "128", "--seed", "5", "--out", d]);
+    let common = ["--preset", "nano", "--data", d, "--out", c, "--eval-every", "1", "--eval-samples", "1"];
+    let side = |f: &std::path::Path| {
+        let bytes = std::fs::read(f).unwrap();
+        Preset::nano().for_weights(&bytes, "w").unwrap().input
+    };
+    run_ok(&[&["train", "--steps", "1", "--input", "24"][..], &common[..]].concat());
+    let w = ckpt.with_extension("weights.safetensors");
+    assert_eq!((side(&w), side(&ckpt)), (24, 24));
+    run_ok(&[&["train", "--steps", "2", "--resume", c][..], &common[..]].concat());
+    assert_eq!(side(&w), 24, "a resume without --input keeps the checkpoint's side");
+    let e = run_err(&[&["train", "--steps", "1", "--force", "--input", "1"][..], &common[..]].concat(), &[]);
+    assert!(e.contains("--input"), "{e}");
+    // Weights naming an impossible side: refused by name, not built into a huge graph.
+    let (params, _) = rendernet::graph::params::parse_safetensors(&std::fs::read(&w).unwrap(), "w").unwrap();
+    let tensors: Vec<_> = params.into_iter().map(|(n, (s, v))| (n, s, v)).collect();
+    let bad = dir.join("bad.safetensors");
+    let meta = [("input".to_string(), format!("{}", MAX_INPUT + 1))].into();
+    rendernet::graph::params::save_safetensors(&bad, &tensors, meta).unwrap();
+    let e = run_err(&["render", "--preset", "nano", "--size", "32", "--weights", bad.to_str().unwrap(), "--out", dir.join("x.png").to_str().unwrap()], &[]);
+    assert!(e.contains("'input'") && e.contains(&MAX_INPUT.to_string()), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -33,6 +33,13 @@ pub struct TrainArgs {
     /// Resume from this checkpoint (same preset and dataset shader).
     #[arg(long)]
     resume: Option<PathBuf>,
+    /// Grid side the network reads: every dataset grid is resampled to N^3 before the camera
+    /// resampling. Default: the preset's (32), or with --resume the checkpoint's. The paper
+    /// reads 64, which keeps thin parts and a 64^3 bunny's face; it costs the network nothing
+    /// (its convs run on the camera grid). Recorded in the weights' metadata (`input`), so
+    /// `render` and `eval` read grids at the same side.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(2..=rendernet::nn::rendernet::MAX_INPUT as u64))]
+    input: Option<u64>,
     /// Start a fresh run from these weights wherever a tensor's name and shape match (a
     /// Phong network's trunk under a contour, toon or AO head, or grey weights under a colour
     /// network's first conv); the other layers start from their initialisation.
@@ -96,8 +103,18 @@ pub(crate) fn step_bar(steps: u64) -> ProgressBar {
 /// Runs training, drawing a progress bar with loss and images/s.
 pub fn run(a: TrainArgs) -> Result<()> {
     refuse_overwrite(&a.out, a.resume.is_some(), a.force)?;
+    let preset = Preset::by_name(&a.preset)?;
+    let preset = match (a.input, &a.resume) {
+        (Some(n), _) => preset.with_input(n as usize),
+        (None, Some(ck)) => {
+            let bytes = std::fs::read(ck).map_err(|e| Error::Io { path: ck.display().to_string(), source: e })?;
+            let input = preset.clone().for_weights(&bytes, &ck.display().to_string())?.input;
+            preset.with_input(input)
+        }
+        (None, None) => preset,
+    };
     let cfg = TrainConfig {
-        preset: Preset::by_name(&a.preset)?,
+        preset,
         data: a.data,
         out: a.out,
         steps: a.steps,

@@ -126,9 +126,10 @@ impl Renderer {
     /// `--shader`): Phong has the normal/albedo/mask heads and takes the light; every other
     /// shader is one image head of [`Shader::channels`] channels that ignores the light.
     /// Weights trained on coloured voxels (4 input channels, see [`weights_take_colour`])
-    /// switch the preset to [`Preset::with_colour`].
+    /// switch the preset to [`Preset::with_colour`], and weights trained at another input
+    /// side read grids at that side ([`Preset::for_weights`]).
     pub fn for_shader(gpu: &Gpu, preset: Preset, shader: Shader, weights: &[u8], name: &str, size: usize) -> Result<Renderer> {
-        let preset = if weights_take_colour(weights, name)? && preset.fully_convolutional() { preset.with_colour() } else { preset };
+        let preset = preset.for_weights(weights, name)?;
         let f = preset.image_for(preset.cam) / preset.cam;
         if size == 0 || size % (4 * f) != 0 {
             return Err(Error::Invalid(format!("image size {size} must be a positive multiple of {}", 4 * f)));

@@ -13,6 +13,10 @@ use crate::ops::phong::Phong;
 use crate::reference::Light;
 pub use super::ec::EcSizes;
 
+/// The largest input grid side a preset may read (`train --input`, weights' `input`): the
+/// paper's 64^3 twice over; beyond it the resampling only aliases a 64^3 or 128^3 camera grid.
+pub const MAX_INPUT: usize = 128;
+
 /// Sizes of a RenderNet.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Preset {
@@ -109,6 +113,29 @@ impl Preset {
     /// albedo head. The weights differ from the grey preset's in those two layers' shapes.
     pub fn with_colour(self) -> Preset {
         Preset { colour: true, ..self }
+    }
+
+    /// The same network reading its grid at `input`^3 (every grid is resampled to it before
+    /// the camera resampling): 32 for the shipped presets' defaults, 64 as the paper. The
+    /// weights do not depend on it (every conv runs on the camera grid), so weights trained
+    /// at one input side load at any other; `train --input` records the side they were
+    /// trained at in their metadata (`input`), and [`Preset::for_weights`] reads it back.
+    pub fn with_input(self, input: usize) -> Preset {
+        Preset { input, ..self }
+    }
+
+    /// This preset as `weights` (safetensors bytes; `name` labels them in errors) were trained:
+    /// coloured if their first conv takes RGB ([`crate::nn::render::weights_take_colour`]),
+    /// and reading grids at the side their metadata records (`input`, written by `train`;
+    /// weights without it keep the preset's). A malformed `input` is an error naming `name`.
+    pub fn for_weights(self, weights: &[u8], name: &str) -> Result<Preset> {
+        let p = if crate::nn::render::weights_take_colour(weights, name)? && self.fully_convolutional() { self.with_colour() } else { self };
+        let (_, meta) = safetensors::SafeTensors::read_metadata(weights).map_err(|e| Error::Invalid(format!("{name}: not a safetensors file: {e}")))?;
+        let Some(v) = meta.metadata().as_ref().and_then(|m| m.get("input").cloned()) else { return Ok(p) };
+        match v.parse::<usize>() {
+            Ok(r) if (2..=MAX_INPUT).contains(&r) => Ok(p.with_input(r)),
+            _ => Err(Error::Invalid(format!("{name}: metadata 'input' is '{v}'; expected a grid side from 2 to {MAX_INPUT}"))),
+        }
     }
 
     /// Channels of the input grid: 4 with colour (occupancy, RGB times occupancy), else 1.

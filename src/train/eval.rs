@@ -80,6 +80,8 @@ pub fn evaluate_bytes(gpu: &Gpu, p: &Preset, head: Head, weights: &[u8], name: &
     let test = ds.split(Split::Test);
     let n = test.spread(limit).count();
     let background = ds.manifest.shader_kind()?.background();
+    // The grid side the weights were trained at (their metadata), as `render` reads them.
+    let p = &p.clone().for_weights(weights, name)?;
     let net = RenderNet::build(p, head, 1, [p.cam, p.cam], false)?;
     let mut ex = Executor::new(gpu, net.graph.clone(), 0)?;
     ex.load_params_bytes(gpu, weights, name)?;

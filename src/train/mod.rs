@@ -196,7 +196,12 @@ pub fn train(gpu: &Gpu, cfg: &TrainConfig, mut report: impl FnMut(Progress)) -> 
     let t0 = std::time::Instant::now();
     let stamp = |ex: &mut Executor, steps_done: u64| {
         let images = images0 + (steps_done - start) * cfg.batch as u64;
-        ex.notes = HashMap::from([("preset".to_string(), p.name.to_string()), ("images".to_string(), images.to_string())]);
+        ex.notes = HashMap::from([
+            ("preset".to_string(), p.name.to_string()),
+            ("images".to_string(), images.to_string()),
+            // The grid side it learned to read, for `render` and `eval` (Preset::for_weights).
+            ("input".to_string(), p.input.to_string()),
+        ]);
         if let Some(s0) = seconds0 {
             ex.notes.insert("train_seconds".to_string(), format!("{:.0}", s0 + t0.elapsed().as_secs_f64()));
         }
