@@ -270,14 +270,15 @@ fn render_accepts_a_training_checkpoint_as_weights() {
     let dir = scratch("ckpt");
     let (weights, ckpt) = (dir.join("w.safetensors"), dir.join("run.ckpt"));
     std::fs::write(&weights, rendernet::nn::render::TINY_PHONG_WEIGHTS).unwrap();
-    let (params, _) = parse_safetensors(rendernet::nn::render::TINY_PHONG_WEIGHTS, "tiny").unwrap();
+    let (params, mut meta) = parse_safetensors(rendernet::nn::render::TINY_PHONG_WEIGHTS, "tiny").unwrap();
     let mut tensors: Vec<Named> = Vec::new();
     for (name, (shape, vals)) in &params {
         tensors.push((name.clone(), shape.clone(), vals.clone()));
         tensors.push((format!("adam.m.{name}"), shape.clone(), vec![0.5; vals.len()]));
         tensors.push((format!("adam.v.{name}"), shape.clone(), vec![0.25; vals.len()]));
     }
-    let meta = [("step", "1000"), ("seed", "3")].map(|(k, v)| (k.to_string(), v.to_string())).into();
+    // The weights' own metadata (their `input` side among it), as `train` writes both.
+    meta.extend([("step", "1000"), ("seed", "3")].map(|(k, v)| (k.to_string(), v.to_string())));
     save_safetensors(&ckpt, &tensors, meta).unwrap();
     let (a, b) = (dir.join("a.png"), dir.join("b.png"));
     run_ok(&["render", "--size", "32", "--weights", ckpt.to_str().unwrap(), "--out", a.to_str().unwrap()]);
