@@ -122,9 +122,8 @@ fn shipped_weights_render_an_unseen_shape_close_to_the_reference() {
 /// The shipped weights (fine-tuned at a 64^3 input) measured 17.30 dB object PSNR on this
 /// view on lavapipe (the 32^3 weights before them: 18.82, which this light from behind the
 /// left suited better; the first weights: 11.33; an all-black image: 7.05); the threshold
-/// sits just under it
-/// (drivers differ in float rounding by far less than 0.3 dB), so a regression of the
-/// weights, a broken kernel or a mis-loaded tensor fails here.
+/// sits just under it (drivers differ in float rounding by far less than 0.3 dB), so a
+/// regression of the weights, a broken kernel or a mis-loaded tensor fails here.
 const MIN_OBJECT_DB: f64 = 17.0;
 
 /// Cropping the camera grid to the object (the default) leaves the default scene's picture
