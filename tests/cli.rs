@@ -176,6 +176,34 @@ fn eval_reports_every_score_with_its_black_floor() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `eval --reference-on-input` scores the reference renderer on each sample's input grid:
+/// exact (to the targets' u8 rounding, ~59 dB) when the targets were drawn from that very
+/// grid (`--truth-res` = `--res`), and far from it when they come from a grid twice as fine.
+/// JSON carries it under `reference_on_input`; the text adds a column.
+#[test]
+fn eval_scores_the_reference_renderer_on_the_input_grid() {
+    let dir = std::env::temp_dir().join(format!("rendernet-cli-eval-ref-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let reference = |truth_res: &str| {
+        let data = dir.join(format!("data-{truth_res}"));
+        let d = data.to_str().unwrap();
+        run_ok(&["dataset", "--count", "2", "--views", "2", "--res", "16", "--truth-res", truth_res, "--image", "128", "--seed", "3", "--out", d]);
+        let out = run_ok(&["eval", "--data", d, "--json", "--reference-on-input"]);
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("not JSON ({e}): {out}"));
+        let r = &v["reference_on_input"];
+        assert_eq!(r["samples"].as_u64(), Some(2), "{v}");
+        (r["psnr_mean"].as_f64().unwrap(), r["object_psnr_mean"].as_f64().unwrap(), d.to_string())
+    };
+    let (same, same_object, _) = reference("16");
+    assert!(same > 50.0 && same_object > 45.0, "reference on the truth's own grid: {same} / {same_object} dB");
+    let (finer, finer_object, d) = reference("32");
+    assert!(finer < 40.0 && finer_object < same_object - 10.0, "reference on a grid half the truth's side: {finer} / {finer_object} dB");
+    let text = run_ok(&["eval", "--data", &d, "--reference-on-input"]);
+    assert!(text.lines().any(|l| l.contains("object PSNR") && l.contains("reference on the input grid")), "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Runs `rendernet args` with `env` set, asserts it fails without a panic, returns stderr.
 fn run_err(args: &[&str], env: &[(&str, &str)]) -> String {
     let out = rendernet().args(args).envs(env.iter().copied()).output().unwrap();

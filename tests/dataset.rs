@@ -34,6 +34,7 @@ fn opts(seed: u64, shader: Shader) -> GenerateOptions {
         views: 3,
         res: 16,
         truth_res: 32,
+        input_supersample: 1,
         image: 32,
         seed,
         test_fraction: 0.3,
@@ -419,4 +420,25 @@ fn coloured_datasets_carry_the_paint() {
     let real = GenerateOptions { shapes: Shapes::Real, ..o };
     let err = data::generate(gpu(), &real, &tmp("colour-real"), |_, _| {}).unwrap_err().to_string();
     assert!(err.contains("--colour") && err.contains("real"), "{err}");
+}
+
+/// `input_supersample`: the input grids hold each voxel's fraction inside the shape (the
+/// shape's `to_grid_supersampled`, to u8 rounding), so surface voxels lie strictly between 0
+/// and 1, while the targets stay those of the binary dataset; the manifest records the factor.
+/// The default dataset's grids are binary and its manifest says 1.
+#[test]
+fn supersampled_inputs_hold_the_fraction_inside() {
+    let d = tmp("soft");
+    data::generate(gpu(), &GenerateOptions { input_supersample: 4, ..opts(7, Shader::Phong) }, &d, |_, _| {}).unwrap();
+    let (soft, binary) = (Dataset::open(&d).unwrap(), Dataset::open(phong_dir()).unwrap());
+    assert_eq!((soft.manifest.input_supersample, binary.manifest.input_supersample), (4, 1));
+    let (s, b) = (soft.split(Split::Test).get(4).unwrap(), binary.split(Split::Test).get(4).unwrap());
+    let want = chair(shape_seed(7, 4)).to_grid_supersampled(16, 4).unwrap();
+    let err = s.grid.occupancy().iter().zip(want.occupancy()).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+    assert!(err <= 0.5 / 255.0 + 1e-6, "soft grid differs from to_grid_supersampled by {err}");
+    let partial = s.grid.occupancy().iter().filter(|&&v| v > 0.0 && v < 1.0).count();
+    assert!(partial > 50, "only {partial} partial voxels");
+    assert!(b.grid.occupancy().iter().all(|&v| v == 0.0 || v == 1.0), "the default grids are not binary");
+    assert_eq!(s.images, b.images, "the targets depend on the input's sampling");
+    let _ = std::fs::remove_dir_all(&d);
 }

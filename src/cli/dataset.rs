@@ -32,6 +32,12 @@ pub struct DatasetArgs {
     /// Image side in pixels.
     #[arg(long, default_value_t = 128)]
     image: usize,
+    /// Sub-voxels per axis of the input grids: 1 gives binary occupancy (as binvox files);
+    /// K > 1 averages K^3 samples per voxel, so surface voxels hold the fraction inside, as
+    /// `render` voxelises a mesh. A network trained on such grids sees where a surface lies
+    /// within a voxel; the targets are unchanged.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=8))]
+    input_supersample: u64,
     /// Seed of shapes, views and lights; the same seed gives the same bytes.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -85,6 +91,7 @@ pub fn run(a: DatasetArgs) -> Result<()> {
         views: a.views,
         res: a.res,
         truth_res: a.truth_res.unwrap_or(2 * a.res),
+        input_supersample: a.input_supersample as usize,
         image: a.image,
         seed: a.seed,
         test_fraction: a.test_fraction,

@@ -7,7 +7,7 @@ use rendernet::nn::rendernet::Preset;
 use rendernet::train::eval::{EvalReport, Interval};
 use rendernet::nn::render::shipped_weights;
 use rendernet::reference::Shader;
-use rendernet::train::eval::evaluate_bytes;
+use rendernet::train::eval::{evaluate_bytes, evaluate_reference_on_input};
 use rendernet::train::{eval::evaluate, head_for};
 use rendernet::{Error, Gpu, Result};
 use serde_json::{Map, Value, json};
@@ -37,6 +37,12 @@ pub struct EvalArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
+    /// Also score the reference renderer drawing each sample's input grid (the grid the
+    /// network reads) against the target, which the dataset drew from a finer grid: what an
+    /// exact renderer that sees only the network's input scores. Printed as a second column
+    /// (JSON: `reference_on_input`, the same keys).
+    #[arg(long)]
+    reference_on_input: bool,
 }
 
 /// Evaluates and prints the report.
@@ -65,10 +71,15 @@ pub fn run(a: EvalArgs) -> Result<()> {
             evaluate_bytes(&gpu, &p, head, w, &format!("embedded {}-{} weights", p.name, shader.name()), &ds, a.samples)?
         }
     };
+    let reference = if a.reference_on_input { Some(evaluate_reference_on_input(&gpu, &ds, a.samples)?) } else { None };
     if a.json {
-        println!("{}", to_json(&r));
+        let mut j = to_json(&r);
+        if let Some(q) = &reference {
+            j["reference_on_input"] = to_json(q);
+        }
+        println!("{j}");
     } else {
-        print_text(&r);
+        print_text(&r, reference.as_ref());
     }
     Ok(())
 }
@@ -105,20 +116,24 @@ fn to_json(r: &EvalReport) -> Value {
     })
 }
 
-/// One block, a row per score, then full-frame and object PSNR per shape.
-fn print_text(r: &EvalReport) {
+/// One block, a row per score (with the reference renderer on the input grid when given),
+/// then full-frame and object PSNR per shape.
+fn print_text(r: &EvalReport, reference: Option<&EvalReport>) {
     let floor = rendernet::metrics::floor_name(r.background);
     println!("held-out scores, {} samples, {} shapes (mean ± 95% interval; an {floor} image beside):", r.count, r.per_shape.len());
-    let full = Interval { mean: r.mean, ci95: r.ci95 };
-    let rows = [
-        ("full-frame PSNR", full, r.black, 2, " dB"),
-        ("object PSNR", r.object_psnr, r.black_object_psnr, 2, " dB"),
-        ("SSIM", r.ssim, r.black_ssim, 3, ""),
-        ("mask IoU", r.iou, r.black_iou, 3, ""),
-    ];
-    for (name, s, black, d, unit) in rows {
-        let score = format!("{:.d$} ± {:.d$}{unit}", s.mean, s.ci95);
-        println!("  {name:<16} {score:<20} {floor} {black:.d$}{unit}");
+    let rows = |r: &EvalReport| {
+        [
+            ("full-frame PSNR", Interval { mean: r.mean, ci95: r.ci95 }, r.black, 2, " dB"),
+            ("object PSNR", r.object_psnr, r.black_object_psnr, 2, " dB"),
+            ("SSIM", r.ssim, r.black_ssim, 3, ""),
+            ("mask IoU", r.iou, r.black_iou, 3, ""),
+        ]
+    };
+    let score = |s: Interval, d: usize, unit: &str| format!("{:.d$} ± {:.d$}{unit}", s.mean, s.ci95);
+    for (k, (name, s, black, d, unit)) in rows(r).into_iter().enumerate() {
+        let tail = reference.map(|q| format!("  reference on the input grid {}", score(rows(q)[k].1, d, unit))).unwrap_or_default();
+        let black = format!("{floor} {black:.d$}{unit}");
+        println!("  {name:<16} {:<20} {black:<20}{tail}", score(s, d, unit));
     }
     println!("per shape, full-frame / object PSNR:");
     for (k, v) in &r.per_shape {

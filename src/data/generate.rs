@@ -79,6 +79,10 @@ pub struct GenerateOptions {
     pub truth_res: usize,
     /// Image side `S`.
     pub image: usize,
+    /// Sub-voxels per axis of the input grids: 1 (the default) gives binary occupancy, as
+    /// binvox files are; `k > 1` samples `k^3` points per voxel, so surface voxels hold the
+    /// fraction inside (as `render` voxelises a mesh: [`VoxelizeOptions::smooth`]).
+    pub input_supersample: usize,
     /// Seed of everything random.
     pub seed: u64,
     /// Fraction of shapes held out: the last `ceil(test_fraction * count)` go to test.
@@ -98,6 +102,16 @@ pub struct GenerateOptions {
     ///
     /// [`Shape::to_coloured_grid`]: crate::voxel::Shape::to_coloured_grid
     pub colour: bool,
+}
+
+/// The reference renderer's options for a dataset's targets: `supersample` sub-pixels per
+/// axis, `ao_rays` ambient-occlusion rays per pixel (a perfect square in 1..=256).
+pub fn target_options(supersample: u32, ao_rays: u32) -> Result<Options> {
+    let ao_sqrt = (ao_rays as f64).sqrt().round() as u32;
+    if ao_sqrt * ao_sqrt != ao_rays || !(1..=256).contains(&ao_rays) {
+        return Err(Error::Invalid(format!("--ao-rays {ao_rays}: must be a perfect square in 1..=256 (4, 16, 64, ...)")));
+    }
+    Ok(Options { supersample, ao_dirs_sqrt: ao_sqrt, ..Options::default() })
 }
 
 /// What [`generate`] wrote.
@@ -178,6 +192,7 @@ fn shape_grids(
             mesh.colours.clear(); // grey datasets stay grey (--colour refuses real meshes)
             let input = VoxelizeOptions {
                 resolution: o.res,
+                supersample: o.input_supersample,
                 ..Default::default()
             };
             return Ok((
@@ -191,8 +206,9 @@ fn shape_grids(
     if o.colour {
         return Ok((shape.to_coloured_grid(o.res, seed).map_err(verr)?, shape.to_coloured_grid(o.truth_res, seed).map_err(verr)?));
     }
+    let input = if o.input_supersample > 1 { shape.to_grid_supersampled(o.res, o.input_supersample) } else { shape.to_grid(o.res) };
     Ok((
-        shape.to_grid(o.res).map_err(verr)?,
+        input.map_err(verr)?,
         shape.to_grid(o.truth_res).map_err(verr)?,
     ))
 }
@@ -442,15 +458,7 @@ pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path, mut progress: impl F
     }
     let n_test = ((o.test_fraction * o.count as f64).ceil() as usize).min(o.count);
     let n_train = o.count - n_test;
-    let ao_sqrt = (o.ao_rays as f64).sqrt().round() as u32;
-    if ao_sqrt * ao_sqrt != o.ao_rays || !(1..=256).contains(&o.ao_rays) {
-        return Err(Error::Invalid(format!("--ao-rays {}: must be a perfect square in 1..=256 (4, 16, 64, ...)", o.ao_rays)));
-    }
-    let renderer = RayMarcher::new(gpu).with_options(Options {
-        supersample: o.supersample,
-        ao_dirs_sqrt: ao_sqrt,
-        ..Options::default()
-    });
+    let renderer = RayMarcher::new(gpu).with_options(target_options(o.supersample, o.ao_rays)?);
     let mut w = Writer {
         gpu,
         renderer,
@@ -477,6 +485,7 @@ pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path, mut progress: impl F
         shader: o.shader.name().to_string(),
         res: o.res,
         truth_res: o.truth_res,
+        input_supersample: o.input_supersample.max(1),
         image: o.image,
         views: o.views,
         seed: o.seed,

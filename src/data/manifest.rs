@@ -50,6 +50,8 @@ pub struct Manifest {
     pub res: usize,
     /// Side of the grid the targets were rendered from.
     pub truth_res: usize,
+    /// Sub-voxels per axis of the input grids (extra key; 1, binary occupancy, when absent).
+    pub input_supersample: usize,
     /// Image side `S`.
     pub image: usize,
     /// Views per shape.
@@ -91,6 +93,7 @@ impl Manifest {
             "shader": self.shader,
             "res": self.res,
             "truth_res": self.truth_res,
+            "input_supersample": self.input_supersample,
             "image": self.image,
             "views": self.views,
             "seed": self.seed,
@@ -197,6 +200,7 @@ impl Manifest {
             shader: string("shader")?,
             res: size("res", 1024)?,
             truth_res: size("truth_res", 1024)?,
+            input_supersample: v.get("input_supersample").and_then(Value::as_u64).unwrap_or(1).max(1) as usize,
             image: size("image", 8192)?,
             views,
             seed: uint("seed")?,

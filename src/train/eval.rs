@@ -77,9 +77,6 @@ pub fn evaluate(gpu: &Gpu, p: &Preset, head: Head, weights: &Path, ds: &Dataset,
 /// [`evaluate`] with the weights' safetensors bytes (`name` labels them in errors), e.g. the
 /// embedded ones.
 pub fn evaluate_bytes(gpu: &Gpu, p: &Preset, head: Head, weights: &[u8], name: &str, ds: &Dataset, limit: usize) -> Result<EvalReport> {
-    let test = ds.split(Split::Test);
-    let n = test.spread(limit).count();
-    let background = ds.manifest.shader_kind()?.background();
     // The grid side the weights were trained at (their metadata), as `render` reads them.
     let p = &p.clone().for_weights(weights, name)?;
     let net = RenderNet::build(p, head, 1, [p.cam, p.cam], false)?;
@@ -93,12 +90,9 @@ pub fn evaluate_bytes(gpu: &Gpu, p: &Preset, head: Head, weights: &[u8], name: &
     };
     // The image side (twice the camera grid's for the tiny preset), from the network itself.
     let side = net.graph.info(net.image).shape[3];
-    let (mut net_scores, mut black_scores) = (Vec::with_capacity(n), Vec::with_capacity(n));
-    let mut shapes: BTreeMap<u32, Vec<Scores>> = BTreeMap::new();
-    for i in test.spread(limit) {
-        let s = test.get(i)?;
+    score(ds, limit, |s| {
         let mut b = Batch::default();
-        b.push(p, &s, [0, 0, p.cam, p.cam], &[target.to_string()])?;
+        b.push(p, s, [0, 0, p.cam, p.cam], &[target.to_string()])?;
         ex.feed(gpu, net.grid, &b.grid)?;
         ex.feed(gpu, net.pose, &b.pose)?;
         if let Some(l) = net.light {
@@ -109,8 +103,40 @@ pub fn evaluate_bytes(gpu: &Gpu, p: &Preset, head: Head, weights: &[u8], name: &
         let t = &b.targets[0].1;
         // Both sides clamped to [0, 1], as images are stored (the metrics clamp too).
         let image = |data: Vec<f32>| Image { channels: t.len() / (side * side), size: side, data };
-        let truth = image(t.clone());
-        let scores = Scores::on_background(&image(y.iter().map(|v| v.clamp(0.0, 1.0)).collect()), &truth, background);
+        Ok((image(y.iter().map(|v| v.clamp(0.0, 1.0)).collect()), image(t.clone())))
+    })
+}
+
+/// The reference renderer's scores when it draws each held-out sample's *input* grid (the
+/// grid the network reads, before any resampling) against the target, which the dataset drew
+/// from a finer grid (`truth_res`, twice the input's by default). It is what an exact
+/// renderer seeing only the network's input scores: a network can beat it only by guessing
+/// the detail the input lost (thin parts, the anti-aliased surface), so it says how much of a
+/// score bar the input's resolution already rules out.
+pub fn evaluate_reference_on_input(gpu: &Gpu, ds: &Dataset, limit: usize) -> Result<EvalReport> {
+    let shader = ds.manifest.shader_kind()?;
+    let m = &ds.manifest;
+    let marcher = crate::reference::RayMarcher::new(gpu).with_options(crate::data::generate::target_options(m.supersample, m.ao_rays)?);
+    let target = crate::data::image_outputs(shader, ds.manifest.colour).first().map(|o| o.0).unwrap_or("image");
+    score(ds, limit, |s| {
+        let truth = s.images.get(target).ok_or_else(|| crate::error::Error::Invalid(format!("{}: held-out sample lacks the '{target}' image", ds.dir().display())))?;
+        let drawn = marcher.render(gpu, &s.grid, &s.view, &s.light, shader, truth.size as u32)?;
+        Ok((drawn, truth.clone()))
+    })
+}
+
+/// Scores up to `limit` held-out samples (0 = all) of `ds`, `draw` giving each sample's
+/// prediction and truth.
+fn score(ds: &Dataset, limit: usize, mut draw: impl FnMut(&crate::data::Sample) -> Result<(Image, Image)>) -> Result<EvalReport> {
+    let test = ds.split(Split::Test);
+    let n = test.spread(limit).count();
+    let background = ds.manifest.shader_kind()?.background();
+    let (mut net_scores, mut black_scores) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    let mut shapes: BTreeMap<u32, Vec<Scores>> = BTreeMap::new();
+    for i in test.spread(limit) {
+        let s = test.get(i)?;
+        let (pred, truth) = draw(&s)?;
+        let scores = Scores::on_background(&pred, &truth, background);
         net_scores.push(scores);
         black_scores.push(Scores::background_floor(&truth, background));
         shapes.entry(s.shape_id).or_default().push(scores);
