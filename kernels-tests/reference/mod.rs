@@ -11,5 +11,6 @@ pub mod phong;
 pub mod projection;
 pub mod resample;
 pub mod resize_conv;
+pub mod composite;
 pub mod concat;
 pub mod mul;

@@ -17,6 +17,7 @@
 //! | `Concat` | a[N,C1,S..], b[N,C2,S..] | nothing |
 //! | `Reshape(shape)` | x (same size as `shape`) | nothing |
 //! | `Mul` | x[N,C,S..], m[N,1|C,S..] | both |
+//! | `Composite` | x[N,C,D,H,W] (channel 0 occupancy) | x |
 
 use crate::error::{Result, shape_err};
 use crate::gpu::{Gpu, Tensor};
@@ -58,6 +59,9 @@ pub enum Op {
     /// Elementwise product, the second input broadcast over channels when it has one
     /// (a texture times the occupancy it paints).
     Mul,
+    /// Front-to-back compositing along depth, `[N, C, D, H, W]` to `[N, C, H, W]`: what each
+    /// pixel sees through its column (channel 0 the occupancy; `ops::composite`).
+    Composite,
 }
 
 /// What a node's forward or backward gets to work with.
@@ -88,12 +92,13 @@ impl Op {
             Op::Concat => "concat",
             Op::Reshape(_) => "reshape",
             Op::Mul => "mul",
+            Op::Composite => "composite",
         }
     }
 
     fn arity(&self) -> usize {
         match self {
-            Op::Sigmoid | Op::Elu(_) | Op::Dropout(_) | Op::Reshape(_) => 1,
+            Op::Sigmoid | Op::Elu(_) | Op::Dropout(_) | Op::Reshape(_) | Op::Composite => 1,
             Op::Prelu | Op::Add | Op::Loss(_) | Op::Resample(_) | Op::Concat | Op::Mul => 2,
             Op::Projection | Op::Conv(_) | Op::ConvTranspose(_) => 3,
             Op::Phong(_) => 4,
@@ -151,6 +156,7 @@ impl Op {
             }
             Op::Concat => ops::concat::output_shape(s),
             Op::Mul => ops::mul::output_shape(s[0], s[1]),
+            Op::Composite => ops::composite::output_shape(s[0]),
             Op::Reshape(to) => {
                 if to.iter().product::<usize>() != s[0].iter().product::<usize>() || to.contains(&0) {
                     return Err(shape_err("reshape", format!("{:?} cannot become {to:?}: the sizes differ", s[0])));
@@ -182,7 +188,7 @@ impl Op {
     pub(crate) fn saves(&self) -> (&'static [usize], bool) {
         match self {
             Op::Sigmoid => (&[], true),
-            Op::Elu(_) => (&[0], false),
+            Op::Elu(_) | Op::Composite => (&[0], false),
             Op::Prelu => (&[0, 1], false),
             Op::Dropout(_) | Op::Add | Op::Concat | Op::Reshape(_) => (&[], false),
             Op::Projection => (&[0, 1], false),
@@ -217,6 +223,7 @@ impl Op {
             Op::Concat => ops::concat::forward(g, p, x, y),
             Op::Reshape(_) => ops::add::reshape(g, p, x[0], y),
             Op::Mul => ops::mul::forward(g, p, x[0], x[1], y),
+            Op::Composite => ops::composite::forward(g, p, x[0], y),
         }
     }
 
@@ -289,6 +296,7 @@ impl Op {
                 some(dx[0], |d| ops::mul::backward_x(g, p, dy, x[1], d))?;
                 some(dx[1], |d| ops::mul::backward_mask(g, p, x[0], dy, d))
             }
+            Op::Composite => some(dx[0], |d| ops::composite::backward(g, p, x[0], dy, d)),
         }
     }
 }

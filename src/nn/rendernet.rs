@@ -290,6 +290,35 @@ impl Builder<'_> {
         self.g.apply(&format!("{name}.add"), Op::Add, &[h, x])
     }
 
+    /// A coloured network's colour path: the camera grid composited front to back along
+    /// depth (`Op::Composite`: coverage and the RGB seen through each column), brought to the
+    /// image's size (`2^(ups-1)` times the camera grid's) by `ups - 1` stride-2 4x4 transposed
+    /// convs to 3 channels (one 3x3 conv when `ups` is 1), the last one starting at zero so a network widened from grey
+    /// weights renders exactly as they do (`colour.up.{i}.weight` / `.bias`).
+    pub(crate) fn colour_seen(&mut self, camera_grid: Value, ups: usize) -> Result<Value> {
+        let mut x = self.g.apply("colour.composite", Op::Composite, &[camera_grid])?;
+        let steps = ups.saturating_sub(1).max(1);
+        for i in 0..steps {
+            let cin = self.g.info(x).shape[1];
+            let last = i + 1 == steps;
+            let (kernel, init) = if ups == 1 { ([3, 3], Init::Xavier) } else { ([4, 4], Init::XavierUpsample) };
+            let init = if last { Init::Constant(0.0) } else { init };
+            let name = format!("colour.up.{i}");
+            let w_shape = if ups == 1 { [3, cin, 3, 3] } else { [cin, 3, kernel[0], kernel[1]] };
+            let w = self.param(&format!("{name}.weight"), &w_shape, init)?;
+            let b = self.param(&format!("{name}.bias"), &[3], Init::Constant(0.0))?;
+            x = if ups == 1 {
+                self.g.apply(&name, Op::Conv(Conv::conv2d([3, 3], [1, 1], Padding::Same)), &[x, w, b])?
+            } else {
+                self.g.apply(&name, Op::ConvTranspose(ConvTranspose::conv2d([4, 4], [2, 2], Padding::Same)), &[x, w, b])?
+            };
+            if !last {
+                x = self.prelu(&format!("{name}.act"), x)?;
+            }
+        }
+        Ok(x)
+    }
+
     pub(crate) fn head(&mut self, name: &str, x: Value, c: usize) -> Result<Value> {
         let h = self.conv(name, x, c, Conv::conv2d([3, 3], [1, 1], Padding::Same))?;
         self.g.apply(&format!("{name}.sigmoid"), Op::Sigmoid, &[h])
@@ -333,8 +362,8 @@ impl RenderNet {
         }
         let mut b = Builder { g: &mut g };
         let pose = b.g.input("pose", &[n, 6])?;
-        let x = b.g.apply("resample", Op::Resample([p.cam, cam_hw[0], cam_hw[1]]), &[grid, pose])?;
-        let x = b.conv("enc3d.conv1", x, p.c3[0], Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same))?;
+        let camera_grid = b.g.apply("resample", Op::Resample([p.cam, cam_hw[0], cam_hw[1]]), &[grid, pose])?;
+        let x = b.conv("enc3d.conv1", camera_grid, p.c3[0], Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same))?;
         let x = b.prelu("enc3d.act1", x)?;
         let x = b.conv("enc3d.conv2", x, p.c3[1], Conv::conv3d([3, 3, 3], [2, 1, 1], Padding::Same))?;
         let mut x = b.prelu("enc3d.act2", x)?;
@@ -361,7 +390,16 @@ impl RenderNet {
         let (image, maps, light) = match head {
             Head::Phong(ph) => {
                 let normal = b.head("head.normal", x, 3)?;
-                let albedo = b.head("head.albedo", x, p.albedo_channels())?;
+                let albedo = if p.colour {
+                    // The visible colour, composited along the camera grid's depth, added to
+                    // the albedo head's logits at the image's size.
+                    let seen = b.colour_seen(camera_grid, p.up.len())?;
+                    let h = b.conv("head.albedo", x, 3, Conv::conv2d([3, 3], [1, 1], Padding::Same))?;
+                    let h = b.g.apply("head.albedo.seen", Op::Add, &[h, seen])?;
+                    b.g.apply("head.albedo.sigmoid", Op::Sigmoid, &[h])?
+                } else {
+                    b.head("head.albedo", x, 1)?
+                };
                 let mask = b.head("head.mask", x, 1)?;
                 let light = b.g.input("light", &[n, 6])?;
                 let img = b.g.apply("phong", Op::Phong(ph), &[normal, albedo, mask, light])?;

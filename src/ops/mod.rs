@@ -8,6 +8,7 @@
 
 pub mod adam;
 pub mod add;
+pub mod composite;
 pub mod concat;
 pub mod conv;
 pub mod conv_transpose;
