@@ -462,6 +462,26 @@ fn render_uses_the_shipped_weights_of_the_preset() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A grid with colour (a painted `--shape`, a `.vox` palette) renders with the shipped colour
+/// weights unless `--weights` says otherwise; a grey one keeps the grey weights; `eval` on a
+/// coloured dataset finds the colour weights too.
+#[test]
+fn render_picks_the_colour_weights_for_a_coloured_grid() {
+    let dir = scratch("colour-weights");
+    let png = dir.join("c.png");
+    let p = png.to_str().unwrap();
+    let out = run_ok(&["render", "--shape", "chair", "--seed", "9001", "--colour", "--size", "64", "--out", p]);
+    assert!(out.contains("embedded tiny-phong-colour weights") && png.exists(), "{out}");
+    let out = run_ok(&["render", "--shape", "chair", "--seed", "9001", "--size", "64", "--out", p]);
+    assert!(out.contains("embedded tiny-phong weights (held-out"), "{out}");
+    let data = dir.join("data");
+    let d = data.to_str().unwrap();
+    run_ok(&["dataset", "--colour", "--count", "1", "--views", "1", "--res", "16", "--image", "128", "--seed", "2", "--test-fraction", "1", "--out", d]);
+    let out = run_ok(&["eval", "--data", d, "--json"]);
+    assert!(out.contains("object_psnr_mean"), "{out}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `--quality` and `--target-psnr` pick a shipped model by its measured accuracy: the fastest
 /// that meets the target; a target none meets names the best there is.
 #[test]

@@ -50,7 +50,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let gpu = Gpu::new()?;
     let preset = a.net.preset()?;
     let net_preset = preset.name;
-    let (bytes, name) = a.net.load_for(a.shader)?;
+    let (bytes, name) = a.net.load_for_grid(a.shader, grid.colour().is_some())?;
     let mut net = Renderer::for_shader(&gpu, preset, a.shader, &bytes, &name, a.size)?.with_crop_margin((!a.no_crop).then_some(a.crop_margin));
     let (view, light) = (a.scene.view(), a.scene.light());
     let t1 = Instant::now();
@@ -65,7 +65,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     } else {
         img.save_png(&a.out)?;
     }
-    let measured = SHIPPED.iter().find(|m| a.net.weights.is_none() && a.shader == Shader::Phong && m.preset == net_preset).map(|m| format!(" (held-out object PSNR {:.2} dB)", m.object_psnr));
+    let measured = SHIPPED.iter().find(|m| a.net.weights.is_none() && grid.colour().is_none() && a.shader == Shader::Phong && m.preset == net_preset).map(|m| format!(" (held-out object PSNR {:.2} dB)", m.object_psnr));
     println!("rendered {} with {name}{}", a.scene.describe(&what), measured.unwrap_or_default());
     println!(
         "wrote {} in {:.2} s (network forward {:.2} s, on {})",

@@ -63,10 +63,20 @@ impl WeightsArgs {
     /// The weights' bytes and a name for messages, for a network trained on `shader`: the
     /// file given, or the embedded weights of the preset and shader where some are shipped.
     pub fn load_for(&self, shader: Shader) -> Result<(Vec<u8>, String)> {
+        self.load_for_grid(shader, false)
+    }
+
+    /// [`WeightArgs::load_for`] for a grid that may have colour: without `--weights`, a
+    /// coloured grid gets the preset's shipped colour weights where there are some (grey
+    /// weights would ignore its colour).
+    pub fn load_for_grid(&self, shader: Shader, coloured: bool) -> Result<(Vec<u8>, String)> {
         if let Some(p) = &self.weights {
             return Ok((std::fs::read(p).map_err(|e| Error::Io { path: p.display().to_string(), source: e })?, p.display().to_string()));
         }
         let preset = self.preset()?;
+        if coloured && let Some(w) = shipped_weights(&preset.clone().with_colour(), shader) {
+            return Ok((w.to_vec(), format!("embedded {}-{}-colour weights", preset.name, shader.name())));
+        }
         shipped_weights(&preset, shader).map(|w| (w.to_vec(), format!("embedded {}-{} weights", preset.name, shader.name()))).ok_or_else(|| {
             let shipped = shipped_shaders().iter().map(|(s, names)| format!("{} ({})", s.name(), names.join(", "))).collect::<Vec<_>>().join(", ");
             Error::Invalid(format!(

@@ -26,6 +26,11 @@ pub const TINY_AO_WEIGHTS: &[u8] = include_bytes!("../../weights/tiny-ao.safeten
 /// yet the crisp bands and lines.
 pub const TINY_TOON_WEIGHTS: &[u8] = include_bytes!("../../weights/tiny-toon.safetensors");
 
+/// The tiny preset for coloured voxels (`.vox` palettes, mesh vertex colours, painted
+/// procedural shapes): the Phong weights widened to RGB input and albedo and fine-tuned on
+/// `dataset --colour` (weights/README.md). `render` picks it for a grid that has colour.
+pub const TINY_PHONG_COLOUR_WEIGHTS: &[u8] = include_bytes!("../../weights/tiny-phong-colour.safetensors");
+
 /// A shipped Phong model and its measured accuracy, for picking one by quality.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShippedModel {
@@ -60,11 +65,11 @@ pub fn shipped_phong_weights(preset: &Preset) -> Option<&'static [u8]> {
     shipped_weights(preset, Shader::Phong)
 }
 
-/// The shipped weights of `preset` trained for `shader`, if any (none for a colour preset:
-/// every shipped file takes grey grids).
+/// The shipped weights of `preset` trained for `shader`, if any (for a colour preset, only
+/// tiny's Phong weights).
 pub fn shipped_weights(preset: &Preset, shader: Shader) -> Option<&'static [u8]> {
     if preset.colour {
-        return None;
+        return (preset.name == "tiny" && shader == Shader::Phong).then_some(TINY_PHONG_COLOUR_WEIGHTS);
     }
     match (preset.name, shader) {
         ("tiny", Shader::Phong) => Some(TINY_PHONG_WEIGHTS),
