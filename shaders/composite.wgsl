@@ -20,14 +20,21 @@ fn at(b: u32, c: u32, d: u32, s: u32) -> u32 {
     return ((b * p.c + c) * p.d + d) * p.hw + s;
 }
 
+// The column an invocation handles: (batch item, pixel), or none past the end.
+fn column(gid: vec3<u32>, nwg: vec3<u32>) -> vec2<u32> {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    let b = i / p.hw;
+    return vec2<u32>(b, i - b * p.hw);
+}
+
 @group(0) @binding(2) var<storage, read_write> y: array<f32>;
 
 @compute @workgroup_size(64)
 fn composite_forward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let i = gid.x + gid.y * nwg.x * 64u;
-    if (i >= p.n * p.hw) { return; }
-    let b = i / p.hw;
-    let s = i - b * p.hw;
+    let col = column(gid, nwg);
+    if (col.x >= p.n) { return; }
+    let b = col.x;
+    let s = col.y;
     for (var c = 0u; c < p.c; c++) {
         var t = 1.0;
         var acc = 0.0;
@@ -45,10 +52,10 @@ fn composite_forward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num
 
 @compute @workgroup_size(64)
 fn composite_backward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let i = gid.x + gid.y * nwg.x * 64u;
-    if (i >= p.n * p.hw) { return; }
-    let b = i / p.hw;
-    let s = i - b * p.hw;
+    let col = column(gid, nwg);
+    if (col.x >= p.n) { return; }
+    let b = col.x;
+    let s = col.y;
     // Front to back: T_k into dx's channel 0.
     var t = 1.0;
     for (var k = 0u; k < p.d; k++) {
@@ -57,6 +64,7 @@ fn composite_backward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
         t *= 1.0 - x[at(b, 0u, d, s)];
     }
     // Back to front (d = 0 is the back): `acc` holds B_{k+1}, the gradient behind voxel k.
+    let g0 = dy[b * p.c * p.hw + s];
     var acc = 0.0;
     for (var d = 0u; d < p.d; d++) {
         let tk = dx[at(b, 0u, d, s)];
@@ -69,7 +77,7 @@ fn composite_backward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(nu
             }
         }
         let o = x[at(b, 0u, d, s)];
-        dx[at(b, 0u, d, s)] = tk * (dy[b * p.c * p.hw + s] - acc);
+        dx[at(b, 0u, d, s)] = tk * (g0 - acc);
         acc = v + (1.0 - o) * acc;
     }
 }

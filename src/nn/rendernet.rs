@@ -293,25 +293,24 @@ impl Builder<'_> {
     /// A coloured network's colour path: the camera grid composited front to back along
     /// depth (`Op::Composite`: coverage and the RGB seen through each column), brought to the
     /// image's size (`2^(ups-1)` times the camera grid's) by `ups - 1` stride-2 4x4 transposed
-    /// convs to 3 channels (one 3x3 conv when `ups` is 1), the last one starting at zero so a network widened from grey
-    /// weights renders exactly as they do (`colour.up.{i}.weight` / `.bias`).
+    /// convs to 3 channels (one 3x3 conv when `ups` is 1), the last one starting at zero so a
+    /// network widened from grey weights renders exactly as they do (`colour.up.{i}.weight` /
+    /// `.bias`).
     pub(crate) fn colour_seen(&mut self, camera_grid: Value, ups: usize) -> Result<Value> {
         let mut x = self.g.apply("colour.composite", Op::Composite, &[camera_grid])?;
         let steps = ups.saturating_sub(1).max(1);
         for i in 0..steps {
-            let cin = self.g.info(x).shape[1];
-            let last = i + 1 == steps;
-            let (kernel, init) = if ups == 1 { ([3, 3], Init::Xavier) } else { ([4, 4], Init::XavierUpsample) };
-            let init = if last { Init::Constant(0.0) } else { init };
-            let name = format!("colour.up.{i}");
-            let w_shape = if ups == 1 { [3, cin, 3, 3] } else { [cin, 3, kernel[0], kernel[1]] };
-            let w = self.param(&format!("{name}.weight"), &w_shape, init)?;
-            let b = self.param(&format!("{name}.bias"), &[3], Init::Constant(0.0))?;
-            x = if ups == 1 {
-                self.g.apply(&name, Op::Conv(Conv::conv2d([3, 3], [1, 1], Padding::Same)), &[x, w, b])?
+            let (name, cin, last) = (format!("colour.up.{i}"), self.g.info(x).shape[1], i + 1 == steps);
+            // Only the last layer starts at zero: a zero layer before it would pass no gradient.
+            let init = if last { Init::Constant(0.0) } else { Init::XavierUpsample };
+            let (shape, op) = if ups == 1 {
+                ([3, cin, 3, 3], Op::Conv(Conv::conv2d([3, 3], [1, 1], Padding::Same)))
             } else {
-                self.g.apply(&name, Op::ConvTranspose(ConvTranspose::conv2d([4, 4], [2, 2], Padding::Same)), &[x, w, b])?
+                ([cin, 3, 4, 4], Op::ConvTranspose(ConvTranspose::conv2d([4, 4], [2, 2], Padding::Same)))
             };
+            let w = self.param(&format!("{name}.weight"), &shape, init)?;
+            let b = self.param(&format!("{name}.bias"), &[3], Init::Constant(0.0))?;
+            x = self.g.apply(&name, op, &[x, w, b])?;
             if !last {
                 x = self.prelu(&format!("{name}.act"), x)?;
             }
@@ -390,16 +389,15 @@ impl RenderNet {
         let (image, maps, light) = match head {
             Head::Phong(ph) => {
                 let normal = b.head("head.normal", x, 3)?;
-                let albedo = if p.colour {
-                    // The visible colour, composited along the camera grid's depth, added to
-                    // the albedo head's logits at the image's size.
-                    let seen = b.colour_seen(camera_grid, p.up.len())?;
-                    let h = b.conv("head.albedo", x, 3, Conv::conv2d([3, 3], [1, 1], Padding::Same))?;
-                    let h = b.g.apply("head.albedo.seen", Op::Add, &[h, seen])?;
-                    b.g.apply("head.albedo.sigmoid", Op::Sigmoid, &[h])?
-                } else {
-                    b.head("head.albedo", x, 1)?
-                };
+                // Coloured: the visible colour, composited along the camera grid's depth, is
+                // added to the albedo head's logits at the image's size. (Built before the head
+                // so parameters keep their order, hence their seeded initial values.)
+                let seen = if p.colour { Some(b.colour_seen(camera_grid, p.up.len())?) } else { None };
+                let mut h = b.conv("head.albedo", x, p.albedo_channels(), Conv::conv2d([3, 3], [1, 1], Padding::Same))?;
+                if let Some(seen) = seen {
+                    h = b.g.apply("head.albedo.seen", Op::Add, &[h, seen])?;
+                }
+                let albedo = b.g.apply("head.albedo.sigmoid", Op::Sigmoid, &[h])?;
                 let mask = b.head("head.mask", x, 1)?;
                 let light = b.g.input("light", &[n, 6])?;
                 let img = b.g.apply("phong", Op::Phong(ph), &[normal, albedo, mask, light])?;

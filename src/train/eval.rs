@@ -114,10 +114,10 @@ pub fn evaluate_bytes(gpu: &Gpu, p: &Preset, head: Head, weights: &[u8], name: &
 /// the detail the input lost (thin parts, the anti-aliased surface), so it says how much of a
 /// score bar the input's resolution already rules out.
 pub fn evaluate_reference_on_input(gpu: &Gpu, ds: &Dataset, limit: usize) -> Result<EvalReport> {
-    let shader = ds.manifest.shader_kind()?;
     let m = &ds.manifest;
+    let shader = m.shader_kind()?;
     let marcher = crate::reference::RayMarcher::new(gpu).with_options(crate::data::generate::target_options(m.supersample, m.ao_rays)?);
-    let target = crate::data::image_outputs(shader, ds.manifest.colour).first().map(|o| o.0).unwrap_or("image");
+    let target = crate::data::image_outputs(shader, m.colour).first().map(|o| o.0).unwrap_or("image");
     score(ds, limit, |s| {
         let truth = s.images.get(target).ok_or_else(|| crate::error::Error::Invalid(format!("{}: held-out sample lacks the '{target}' image", ds.dir().display())))?;
         let drawn = marcher.render(gpu, &s.grid, &s.view, &s.light, shader, truth.size as u32)?;
