@@ -46,6 +46,10 @@ enum Cmd {
     /// light known; MAP on the prior's code, multi-start) and report their voxel IoU beside
     /// the best start's and the prior's mean shape's.
     EvalShape(cli::shape::EvalShapeArgs),
+    /// Recover the paints of painted shapes from one or more images through the texture
+    /// decoder and the colour network (camera and light known; multi-start on the texture
+    /// code), scored from a view no input image had against the true paint.
+    EvalTexture(cli::texture::EvalTextureArgs),
     /// Recover the camera pose and the light from one image of a known shape, by gradient
     /// descent through the frozen network (coarse silhouette search, then Adam on the best
     /// starts); with --prior, the shape too (alternating with a search on the shape prior's
@@ -94,6 +98,7 @@ fn main() -> ExitCode {
         Cmd::TrainPrior(a) => cli::prior::run(a),
         Cmd::TrainTexture(a) => cli::prior::run_texture(a),
         Cmd::EvalShape(a) => cli::shape::run(a),
+        Cmd::EvalTexture(a) => cli::texture::run(a),
         Cmd::Bench(a) => cli::bench::run(a),
         Cmd::Invert(a) => cli::invert::run(a),
         Cmd::Stress(a) => cli::stress::run(a),

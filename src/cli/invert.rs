@@ -59,9 +59,20 @@ pub struct InvertArgs {
     /// With --prior: Adam steps on the shape code per refined start, each round.
     #[arg(long, default_value_t = rendernet::invert::ShapeOptions::default().steps)]
     shape_steps: usize,
-    /// With --prior: where the recovered grid is written (.binvox, or .safetensors).
-    #[arg(long, default_value = "invert.binvox")]
-    out_voxels: PathBuf,
+    /// Where the recovered grid is written: with --prior .binvox (default invert.binvox) or
+    /// .safetensors; with --texture .vox (default invert.vox) or .safetensors.
+    #[arg(long)]
+    out_voxels: Option<PathBuf>,
+    /// Recover the texture instead of the camera and light: the paint (two colours; plain,
+    /// stripes or a checkerboard) of the shape --voxels/--shape, as a code of the texture
+    /// decoder rendered through the shipped colour network, at the camera and light the
+    /// scene flags give (--azimuth ... --light-elevation: with --image, the image's own).
+    /// Writes the painted grid to --out-voxels, and --out: input | the recovered paint drawn
+    /// by the reference renderer at that view | the same from 90 degrees further round.
+    #[arg(long, conflicts_with = "prior")]
+    texture: bool,
+    #[command(flatten)]
+    texture_search: super::texture::TextureSearchArgs,
     /// Print JSON (pose, light, MSE, errors when known, loss curve, seconds) instead of text.
     #[arg(long)]
     json: bool,
@@ -72,7 +83,10 @@ pub fn run(a: InvertArgs) -> Result<()> {
     let t0 = Instant::now();
     super::output::check_png_out(&a.out)?;
     if a.prior.is_some() {
-        voxels_format(&a.out_voxels)?;
+        voxels_format(&a.out_voxels(), false)?;
+    }
+    if a.texture {
+        voxels_format(&a.out_voxels(), true)?;
     }
     let preset = a.net.preset()?;
     if a.image.is_none() {
@@ -81,6 +95,9 @@ pub fn run(a: InvertArgs) -> Result<()> {
     }
     let (grid, what) = load(&a.scene)?;
     let gpu = Gpu::new()?;
+    if a.texture {
+        return super::texture::invert_texture(&a.texture_search, &a.net, &gpu, &grid, &what, a.image.as_deref(), &a.scene, &a.out, &a.out_voxels(), a.json, t0);
+    }
     let (bytes, name) = a.net.load()?;
     let inv = Inverter::new(preset, &bytes, &name, Light::default());
     let (target, truth) = match &a.image {
@@ -138,11 +155,20 @@ pub fn run(a: InvertArgs) -> Result<()> {
     Ok(())
 }
 
-/// The format `--out-voxels` names: `binvox` or `safetensors`, else an error.
-fn voxels_format(path: &std::path::Path) -> Result<&str> {
-    match path.extension().and_then(|e| e.to_str()) {
-        Some(e @ ("binvox" | "safetensors")) => Ok(e),
-        _ => Err(Error::Invalid(format!("--out-voxels {}: write .binvox or .safetensors", path.display()))),
+impl InvertArgs {
+    /// `--out-voxels`, or its default for the mode.
+    fn out_voxels(&self) -> PathBuf {
+        self.out_voxels.clone().unwrap_or_else(|| PathBuf::from(if self.texture { "invert.vox" } else { "invert.binvox" }))
+    }
+}
+
+/// The format `--out-voxels` names: `binvox` (`vox` for a coloured grid) or `safetensors`,
+/// else an error.
+pub(crate) fn voxels_format(path: &std::path::Path, colour: bool) -> Result<&str> {
+    match (path.extension().and_then(|e| e.to_str()), colour) {
+        (Some(e @ "safetensors"), _) | (Some(e @ "binvox"), false) | (Some(e @ "vox"), true) => Ok(e),
+        (_, false) => Err(Error::Invalid(format!("--out-voxels {}: write .binvox or .safetensors", path.display()))),
+        (_, true) => Err(Error::Invalid(format!("--out-voxels {}: write .vox or .safetensors (a binvox file has no colour)", path.display()))),
     }
 }
 
@@ -150,7 +176,8 @@ fn voxels_format(path: &std::path::Path) -> Result<&str> {
 /// picture, and reports the errors when the truth is known.
 #[allow(clippy::too_many_arguments)]
 fn with_prior(a: &InvertArgs, gpu: &Gpu, inv: &Inverter, prior: Option<&std::path::Path>, truth_grid: &rendernet::voxel::VoxelGrid, target: &Image, truth: Option<(rendernet::reference::View, Light)>, o: &InvertOptions, t0: Instant) -> Result<()> {
-    let ext = voxels_format(&a.out_voxels)?;
+    let out_voxels = a.out_voxels();
+    let ext = voxels_format(&out_voxels, false)?;
     let (pw, prior_name) = super::prior::load_prior(prior)?;
     let pp = rendernet::nn::prior::PriorPreset::small();
     let bar = ProgressBar::new(a.rounds.max(1) as u64);
@@ -162,8 +189,8 @@ fn with_prior(a: &InvertArgs, gpu: &Gpu, inv: &Inverter, prior: Option<&std::pat
     let secs = t1.elapsed().as_secs_f64();
     let grid = &est.shape.grid;
     match ext {
-        "binvox" => rendernet::voxel::binvox::Binvox::from_grid(grid.clone()).write(&a.out_voxels)?,
-        _ => rendernet::voxel::safetensors_io::write(grid, &a.out_voxels)?,
+        "binvox" => rendernet::voxel::binvox::Binvox::from_grid(grid.clone()).write(&out_voxels)?,
+        _ => rendernet::voxel::safetensors_io::write(grid, &out_voxels)?,
     }
     let (view, light) = (est.pose.view, est.pose.light);
     let turned = rendernet::reference::View { azimuth: (view.azimuth + 90.0) % 360.0, ..view };
@@ -176,7 +203,7 @@ fn with_prior(a: &InvertArgs, gpu: &Gpu, inv: &Inverter, prior: Option<&std::pat
             "azimuth": view.azimuth, "elevation": view.elevation, "radius": view.radius,
             "light_azimuth": light.azimuth, "light_elevation": light.elevation, "mse": est.pose.mse,
             "shape_loss_curve": est.shape.curve, "code": est.shape.code, "seconds": secs,
-            "out": a.out.display().to_string(), "out_voxels": a.out_voxels.display().to_string(),
+            "out": a.out.display().to_string(), "out_voxels": out_voxels.display().to_string(),
         });
         if let Some((pe, le)) = errors {
             j["pose_error_degrees"] = pe.into();
@@ -202,7 +229,7 @@ fn with_prior(a: &InvertArgs, gpu: &Gpu, inv: &Inverter, prior: Option<&std::pat
     println!(
         "wrote {} (input | network at the estimate | recovered shape turned 90 degrees) and {} in {:.1} s",
         a.out.display(),
-        a.out_voxels.display(),
+        out_voxels.display(),
         t0.elapsed().as_secs_f64()
     );
     Ok(())

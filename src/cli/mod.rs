@@ -10,6 +10,7 @@ pub mod output;
 pub mod prior;
 pub mod render;
 pub mod shape;
+pub mod texture;
 pub mod stress;
 pub mod train;
 pub mod truth;

@@ -11,8 +11,11 @@
 //! loss; gradients reach the pose through the resampling op and the light through the Phong
 //! op. The start with the lowest final MSE wins.
 
+mod code;
 mod shape;
+mod texture;
 mod starts;
+pub use texture::{TextureError, TextureEstimate, TextureOptions, evaluate_textures, texture_starts};
 pub use shape::{JointEstimate, PoseSource, ShapeError, ShapeEstimate, ShapeOptions, ShapeView, decode_codes, evaluate_shapes};
 
 use crate::error::{Error, Result};

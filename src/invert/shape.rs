@@ -6,14 +6,13 @@
 //! scored by image loss in batches, and the best few are refined. The code stays inside the
 //! decoder's range (0, 1), the sigmoid's.
 
-use super::{Inverter, Window};
+use super::Inverter;
+use super::code::{self, Descent, Front};
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
-use crate::graph::{Executor, Op, Value};
+use crate::graph::Executor;
 use crate::nn::camera;
-use crate::nn::prior::{CodeStats, PriorPreset, decoder_with_renderer};
-use crate::nn::rendernet::{Head, RenderNet, phong_of};
-use crate::ops::loss::Loss;
+use crate::nn::prior::{CodeStats, PriorPreset};
 use crate::reference::{Image, Light, View};
 use crate::voxel::VoxelGrid;
 
@@ -72,131 +71,6 @@ pub struct ShapeEstimate {
     pub curve: Vec<f64>,
 }
 
-/// The prior's decoder in front of a frozen RenderNet for `codes` codes at a time, each
-/// rendered at every view (item `c * views + v`), with the image MSE against the views'
-/// images (plus, with the silhouette term, the mask MSE against their foregrounds).
-struct CodeSearch {
-    net: RenderNet,
-    ex: Executor,
-    code: Value,
-    loss: Value,
-    latent: usize,
-    views: usize,
-    codes: usize,
-    /// Each view's cropped image.
-    targets: Vec<Vec<f32>>,
-    /// With the silhouette term: the mask value and each view's cropped foreground.
-    masks: Option<(Value, Vec<Vec<f32>>)>,
-}
-
-impl CodeSearch {
-    fn new(inv: &Inverter, gpu: &Gpu, prior: &PriorPreset, prior_weights: &[u8], views: &[ShapeView], codes: usize, silhouette: bool) -> Result<CodeSearch> {
-        let p = &inv.preset;
-        let fgs: Vec<Vec<bool>> = views.iter().map(|v| inv.foreground(v.image)).collect::<Result<_>>()?;
-        let wins: Vec<Window> = fgs.iter().map(|fg| Window::around(p, fg, inv.size)).collect();
-        let len = [0, 1].map(|a| wins.iter().map(|w| w.cam[2 + a]).max().unwrap_or(p.cam));
-        let wins: Vec<Window> = wins.iter().map(|w| w.resized(p, len)).collect();
-        let n = codes * views.len();
-        let (mut net, code) = decoder_with_renderer(prior, p, Head::Phong(phong_of(&inv.head_light)), n, [len[0], len[1]])?;
-        let [h, w] = wins[0].pixel_dims();
-        let tv = net.graph.input("target.image", &[n, 3, h, w])?;
-        let mut loss = net.graph.apply("loss.shape", Op::Loss(Loss::Mse), &[net.image, tv])?;
-        let mask_target = if silhouette {
-            let tm = net.graph.input("target.mask", &[n, 1, h, w])?;
-            let lm = net.graph.apply("loss.silhouette", Op::Loss(Loss::Mse), &[net.maps.expect("Phong head")[2], tm])?;
-            loss = net.graph.apply("loss.total", Op::Add, &[loss, lm])?;
-            Some(tm)
-        } else {
-            None
-        };
-        let mut ex = Executor::new(gpu, net.graph.clone(), 0)?;
-        ex.load_params_parts(gpu, &[(&inv.weights, &inv.name, ""), (prior_weights, "prior", "dec.")])?;
-        ex.training = false;
-        ex.freeze_params();
-        ex.want_grad(code);
-        ex.keep(net.grid);
-        ex.keep(net.image);
-        let targets: Vec<Vec<f32>> = views.iter().zip(&wins).map(|(v, w)| w.crop_rgb(v.image)).collect();
-        let each = |f: &dyn Fn(usize) -> Vec<f32>| -> Vec<f32> { (0..n).flat_map(|k| f(k % views.len())).collect() };
-        ex.feed(gpu, net.pose, &each(&|v| camera::pose_for_view(&views[v].view, p.input, p.cam, Some(wins[v].cam)).to_vec()))?;
-        let light = |v: usize| camera::light_values(&Light { azimuth: views[v].light.azimuth, elevation: views[v].light.elevation, ..inv.head_light }).to_vec();
-        ex.feed(gpu, net.light.expect("Phong head"), &each(&light))?;
-        ex.feed(gpu, tv, &each(&|v| targets[v].clone()))?;
-        let masks = match mask_target {
-            Some(tm) => {
-                let m: Vec<Vec<f32>> = fgs.iter().zip(&wins).map(|(fg, w)| w.crop_mask(fg, inv.size).into_iter().map(|b| b as u8 as f32).collect()).collect();
-                ex.feed(gpu, tm, &each(&|v| m[v].clone()))?;
-                let mv = net.maps.expect("Phong head")[2];
-                ex.keep(mv);
-                Some((mv, m))
-            }
-            None => None,
-        };
-        Ok(CodeSearch { net, ex, code, loss, latent: prior.latent, views: views.len(), codes, targets, masks })
-    }
-
-    /// Renders up to `self.codes` codes at every view: each code's image MSE (mean over the
-    /// views) and, with `grad`, its gradient.
-    fn run(&mut self, gpu: &Gpu, codes: &[&[f32]], grad: bool) -> Result<Vec<(f64, Vec<f64>)>> {
-        let mut z = Vec::with_capacity(self.codes * self.views * self.latent);
-        for c in 0..self.codes {
-            // A short list is padded with its last code (those results are dropped).
-            let code = codes[c.min(codes.len() - 1)];
-            for _ in 0..self.views {
-                z.extend_from_slice(code);
-            }
-        }
-        self.ex.feed(gpu, self.code, &z)?;
-        if grad {
-            self.ex.backward(gpu, self.loss)?;
-        } else {
-            self.ex.forward(gpu)?;
-        }
-        let img = self.ex.read(gpu, self.net.image)?;
-        let g = if grad { self.ex.grad(gpu, self.code)? } else { Vec::new() };
-        let mask = match &self.masks {
-            Some((mv, m)) => Some((self.ex.read(gpu, *mv)?, m)),
-            None => None,
-        };
-        let per = self.targets[0].len();
-        // Item k's loss: its image MSE, plus its silhouette MSE with the term.
-        let item = |k: usize| {
-            let v = k % self.views;
-            let sil = mask.as_ref().map_or(0.0, |(mk, m)| mse(&mk[k * m[v].len()..(k + 1) * m[v].len()], &m[v]));
-            mse(&img[k * per..(k + 1) * per], &self.targets[v]) + sil
-        };
-        let n = (self.codes * self.views) as f64;
-        Ok((0..codes.len())
-            .map(|c| {
-                let items = c * self.views..(c + 1) * self.views;
-                let mse = items.clone().map(item).sum::<f64>() / self.views as f64;
-                // The loss is the batch mean: a code's own mean over its views has n / views
-                // times the gradient its rows receive.
-                let gz = if grad {
-                    (0..self.latent).map(|j| items.clone().map(|k| g[k * self.latent + j] as f64).sum::<f64>() * n / self.views as f64).collect()
-                } else {
-                    Vec::new()
-                };
-                (mse, gz)
-            })
-            .collect())
-    }
-
-    /// The grid decoded from `code`.
-    fn decode(&mut self, gpu: &Gpu, code: &[f32], res: usize) -> Result<VoxelGrid> {
-        self.run(gpu, &[code], false)?;
-        let g = self.ex.read(gpu, self.net.grid)?;
-        camera::grid_from_input_values(&g[..res.pow(3)], res)
-    }
-}
-
-fn mse(a: &[f32], b: &[f32]) -> f64 {
-    a.iter().zip(b).map(|(&x, &y)| (x as f64 - y as f64).powi(2)).sum::<f64>() / a.len().max(1) as f64
-}
-
-/// A code's prior term and its gradient (see [`prior_term`]).
-type Penalty<'a> = dyn Fn(&[f32]) -> (f64, Vec<f64>) + 'a;
-
 /// The code's Gaussian prior term and its gradient: `weight` times the mean over entries of
 /// `((z - mean) / std)^2`, the spread floored so a saturated entry does not dominate.
 fn prior_term(z: &[f32], stats: Option<&CodeStats>, weight: f64) -> (f64, Vec<f64>) {
@@ -237,58 +111,10 @@ impl Inverter {
             (None, None) => vec![vec![0.5; prior.latent]],
         };
         let penalty = |z: &[f32]| prior_term(z, stats.as_ref(), o.prior_weight);
-        // Score every start in batches of about 8 renders.
-        let per_batch = (8 / views.len()).clamp(1, starts.len());
-        let mut scorer = CodeSearch::new(self, gpu, prior, prior_weights, views, per_batch, o.silhouette)?;
-        let mut scored = Vec::with_capacity(starts.len());
-        for chunk in starts.chunks(per_batch) {
-            let refs: Vec<&[f32]> = chunk.iter().map(Vec::as_slice).collect();
-            for (z, (m, _)) in chunk.iter().zip(scorer.run(gpu, &refs, false)?) {
-                scored.push((m + penalty(z).0, z.clone()));
-            }
-        }
-        scored.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let start_grid = scorer.decode(gpu, &scored[0].1, prior.res)?;
-        drop(scorer);
-        let mut search = CodeSearch::new(self, gpu, prior, prior_weights, views, 1, o.silhouette)?;
-        let mut best: Option<(f64, Vec<f32>, Vec<f64>)> = None;
-        for (_, z0) in scored.into_iter().take(o.keep.max(1)) {
-            let (loss, z, curve) = self.descend(gpu, &mut search, z0, &penalty, o)?;
-            if best.as_ref().is_none_or(|b| loss < b.0) {
-                best = Some((loss, z, curve));
-            }
-        }
-        let (_, code, curve) = best.expect("at least one start");
-        let grid = search.decode(gpu, &code, prior.res)?;
-        Ok(ShapeEstimate { grid, code, start_grid, curve })
-    }
-
-    /// Adam on the code from `z`: the best (loss, code) met and the best-so-far curve.
-    fn descend(&self, gpu: &Gpu, search: &mut CodeSearch, mut z: Vec<f32>, penalty: &Penalty, o: &ShapeOptions) -> Result<(f64, Vec<f32>, Vec<f64>)> {
-        let (mut m, mut v) = (vec![0.0f64; z.len()], vec![0.0f64; z.len()]);
-        let (b1, b2) = (0.9f64, 0.999f64);
-        let mut curve = Vec::with_capacity(o.steps + 1);
-        let mut best = (f64::INFINITY, z.clone());
-        for step in 0..=o.steps {
-            let (mse, g) = search.run(gpu, &[&z], true)?.swap_remove(0);
-            let (pv, pg) = penalty(&z);
-            if mse + pv < best.0 {
-                best = (mse + pv, z.clone());
-            }
-            curve.push(best.0);
-            if step == o.steps {
-                break;
-            }
-            let t = (step + 1) as i32;
-            for j in 0..z.len() {
-                let gj = g[j] + pg[j];
-                m[j] = b1 * m[j] + (1.0 - b1) * gj;
-                v[j] = b2 * v[j] + (1.0 - b2) * gj * gj;
-                let step = o.lr * (m[j] / (1.0 - b1.powi(t))) / ((v[j] / (1.0 - b2.powi(t))).sqrt() + 1e-12);
-                z[j] = (z[j] as f64 - step).clamp(1e-3, 1.0 - 1e-3) as f32;
-            }
-        }
-        Ok((best.0, best.1, curve))
+        let d = Descent { steps: o.steps, lr: o.lr, keep: o.keep, silhouette: o.silhouette, penalty: &penalty };
+        let f = code::search(self, gpu, &Front::Shape { preset: prior, weights: prior_weights }, views, starts, &d)?;
+        let grid = |v: &[f32]| camera::grid_from_input_values(v, prior.res);
+        Ok(ShapeEstimate { grid: grid(&f.grid)?, code: f.code, start_grid: grid(&f.start_grid)?, curve: f.curve })
     }
 }
 
