@@ -13,4 +13,5 @@ pub mod resample;
 pub mod resize_conv;
 pub mod composite;
 pub mod concat;
+pub mod expand;
 pub mod mul;

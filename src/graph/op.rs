@@ -18,6 +18,7 @@
 //! | `Reshape(shape)` | x (same size as `shape`) | nothing |
 //! | `Mul` | x[N,C,S..], m[N,1|C,S..] | both |
 //! | `Composite` | x[N,C,D,H,W] (channel 0 occupancy) | x |
+//! | `Expand(spatial)` | x[N,C,1..] | nothing |
 
 use crate::error::{Result, shape_err};
 use crate::gpu::{Gpu, Tensor};
@@ -62,6 +63,9 @@ pub enum Op {
     /// Front-to-back compositing along depth, `[N, C, D, H, W]` to `[N, C, H, W]`: what each
     /// pixel sees through its column (channel 0 the occupancy; `ops::composite`).
     Composite,
+    /// `[N, C, 1...]` repeated over the given spatial shape (`[N, C, S...]`): a per-item
+    /// value painted over a whole grid.
+    Expand(Vec<usize>),
 }
 
 /// What a node's forward or backward gets to work with.
@@ -93,12 +97,13 @@ impl Op {
             Op::Reshape(_) => "reshape",
             Op::Mul => "mul",
             Op::Composite => "composite",
+            Op::Expand(_) => "expand",
         }
     }
 
     fn arity(&self) -> usize {
         match self {
-            Op::Sigmoid | Op::Elu(_) | Op::Dropout(_) | Op::Reshape(_) | Op::Composite => 1,
+            Op::Sigmoid | Op::Elu(_) | Op::Dropout(_) | Op::Reshape(_) | Op::Composite | Op::Expand(_) => 1,
             Op::Prelu | Op::Add | Op::Loss(_) | Op::Resample(_) | Op::Concat | Op::Mul => 2,
             Op::Projection | Op::Conv(_) | Op::ConvTranspose(_) => 3,
             Op::Phong(_) => 4,
@@ -157,6 +162,7 @@ impl Op {
             Op::Concat => ops::concat::output_shape(s),
             Op::Mul => ops::mul::output_shape(s[0], s[1]),
             Op::Composite => ops::composite::output_shape(s[0]),
+            Op::Expand(to) => ops::expand::output_shape(s[0], to),
             Op::Reshape(to) => {
                 if to.iter().product::<usize>() != s[0].iter().product::<usize>() || to.contains(&0) {
                     return Err(shape_err("reshape", format!("{:?} cannot become {to:?}: the sizes differ", s[0])));
@@ -190,7 +196,7 @@ impl Op {
             Op::Sigmoid => (&[], true),
             Op::Elu(_) | Op::Composite => (&[0], false),
             Op::Prelu => (&[0, 1], false),
-            Op::Dropout(_) | Op::Add | Op::Concat | Op::Reshape(_) => (&[], false),
+            Op::Dropout(_) | Op::Add | Op::Concat | Op::Reshape(_) | Op::Expand(_) => (&[], false),
             Op::Projection => (&[0, 1], false),
             Op::Resample(_) | Op::Conv(_) | Op::ConvTranspose(_) => (&[0, 1], false),
             Op::Phong(_) => (&[0, 1, 2, 3], false),
@@ -224,6 +230,7 @@ impl Op {
             Op::Reshape(_) => ops::add::reshape(g, p, x[0], y),
             Op::Mul => ops::mul::forward(g, p, x[0], x[1], y),
             Op::Composite => ops::composite::forward(g, p, x[0], y),
+            Op::Expand(_) => ops::expand::forward(g, p, x[0], y),
         }
     }
 
@@ -297,6 +304,7 @@ impl Op {
                 some(dx[1], |d| ops::mul::backward_mask(g, p, x[0], dy, d))
             }
             Op::Composite => some(dx[0], |d| ops::composite::backward(g, p, x[0], dy, d)),
+            Op::Expand(_) => some(dx[0], |d| ops::expand::backward(g, p, dy, d)),
         }
     }
 }

@@ -15,6 +15,7 @@ pub mod conv_transpose;
 mod conv_fast;
 pub mod dropout;
 pub mod elu;
+pub mod expand;
 pub mod finite;
 pub mod loss;
 pub mod mul;
