@@ -46,7 +46,7 @@ pub mod voxel;
 
 pub use error::{Error, Result};
 pub use gpu::{Gpu, Tensor};
-pub use nn::render::{Renderer, TINY_AO_WEIGHTS, TINY_PHONG_WEIGHTS, TINY_TOON_WEIGHTS};
+pub use nn::render::{Renderer, TINY_AO_WEIGHTS, TINY_CONTOUR_WEIGHTS, TINY_PHONG_WEIGHTS, TINY_TOON_WEIGHTS};
 pub use nn::rendernet::Preset;
 pub use reference::{Image, Light, RayMarcher, Shader, View};
 pub use voxel::{VoxelGrid, bunny, load};

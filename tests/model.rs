@@ -149,6 +149,30 @@ fn shipped_colour_weights_render_a_painted_chair_in_its_colours() {
     assert!(s.object_psnr > unpainted.object_psnr + 2.0, "the paint moved object PSNR only {:.2} -> {:.2} dB", unpainted.object_psnr, s.object_psnr);
 }
 
+/// The shipped contour weights draw a procedural chair they never saw, at the paper's closest
+/// framing (radius 3.3), close to the reference line drawing: full-frame PSNR above a
+/// threshold just under the measured value, and well above an all-white image's.
+#[test]
+fn shipped_contour_weights_draw_an_unseen_chair() {
+    use rendernet::nn::render::TINY_CONTOUR_WEIGHTS;
+    let gpu = Gpu::new().unwrap();
+    let grid = rendernet::voxel::Family::Chair.generate(9001).to_grid(64).unwrap();
+    let (view, light) = (View { radius: 3.3, ..View::default() }, Light::default());
+    let mut net = Renderer::for_shader(&gpu, Preset::tiny(), Shader::Contour, TINY_CONTOUR_WEIGHTS, "embedded contour", 128).unwrap();
+    let opts = reference::Options { supersample: 2, ..reference::Options::default() };
+    let truth = reference::RayMarcher::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Contour, 128).unwrap();
+    let s = Scores::on_background(&net.render(&gpu, &grid, &view, &light).unwrap(), &truth, 1.0);
+    let white = Scores::background_floor(&truth, 1.0);
+    eprintln!("full-frame PSNR {:.2} dB (all-white {:.2}), object {:.2} (all-white {:.2})", s.psnr, white.psnr, s.object_psnr, white.object_psnr);
+    assert!(s.psnr > MIN_CONTOUR_DB, "contour weights: full-frame PSNR {:.2} dB, expected > {MIN_CONTOUR_DB}", s.psnr);
+    assert!(s.object_psnr > white.object_psnr + 3.0, "object PSNR {:.2} dB is near an all-white image's {:.2}", s.object_psnr, white.object_psnr);
+}
+
+/// The shipped contour weights measured 16.20 dB full frame (object 11.70; an all-white
+/// image 11.77 / 7.03) on this chair on lavapipe (`render --shader contour --shape chair
+/// --seed 9001 --radius 3.3 --compare`); the threshold sits just under it.
+const MIN_CONTOUR_DB: f64 = 15.9;
+
 /// The shipped colour weights measured 21.49 dB object PSNR on this chair at the default view
 /// on lavapipe (the same weights on the unpainted chair: 13.74; an all-black image: 12.41);
 /// the threshold sits just under it.
@@ -250,9 +274,9 @@ fn weights_of_another_shader_render_with_its_head() {
     assert!(out.contains("tensors taken, 2 initialised fresh (head.image.weight, head.image.bias)"), "{out}");
     let refused = Command::new(env!("CARGO_BIN_EXE_rendernet")).args(["train", "--data", d, "--out", "x.ckpt", "--init", "a", "--resume", "b"]).output().unwrap();
     assert!(!refused.status.success() && String::from_utf8_lossy(&refused.stderr).contains("--init"));
-    let refused = Command::new(env!("CARGO_BIN_EXE_rendernet")).args(["render", "--shader", "contour", "--out", png.to_str().unwrap()]).output().unwrap();
+    let refused = Command::new(env!("CARGO_BIN_EXE_rendernet")).args(["render", "--shader", "depth", "--out", png.to_str().unwrap()]).output().unwrap();
     let err = String::from_utf8_lossy(&refused.stderr);
-    assert!(!refused.status.success() && err.contains("--shader contour") && err.contains("ao (tiny)") && err.contains("toon (tiny)") && err.contains("--weights"), "{err}");
+    assert!(!refused.status.success() && err.contains("--shader depth") && err.contains("ao (tiny)") && err.contains("contour (tiny)") && err.contains("--weights"), "{err}");
     // Toon weights are shipped too: an RGB image head, no light input.
     let out = rendernet(&["render", "--shader", "toon", "--size", "64", "--out", png.to_str().unwrap()]);
     assert!(out.contains("embedded tiny-toon weights") && !out.contains("PSNR"), "{out}");

@@ -93,7 +93,7 @@ pub fn run(a: EvalTextureArgs) -> Result<()> {
             "shapes": errs.len(), "views": a.views, "novel_view_object_psnr_mean": psnr.mean, "novel_view_object_psnr_ci95": psnr.ci95,
             "start_object_psnr_mean": start.mean, "white_object_psnr_mean": white.mean, "colour_error_median": colour,
             "pattern_right": right, "seconds_per_shape": secs.mean,
-            "per_shape": errs.iter().map(|e| serde_json::json!({"shape": e.shape, "novel_view_object_psnr": e.novel_view_psnr, "start_object_psnr": e.start_psnr,
+            "per_shape": errs.iter().map(|e| serde_json::json!({"shape": e.shape, "paint": describe(&e.paint), "recovered": describe(&e.recovered), "novel_view_object_psnr": e.novel_view_psnr, "start_object_psnr": e.start_psnr,
                 "white_object_psnr": e.white_psnr, "colour_error": e.colour_error, "pattern_right": e.pattern_right, "seconds": e.seconds})).collect::<Vec<_>>(),
         });
         println!("{}", serde_json::to_string_pretty(&j).map_err(|e| Error::Invalid(e.to_string()))?);

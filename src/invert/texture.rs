@@ -101,6 +101,10 @@ impl Inverter {
 pub struct TextureError {
     /// Procedural family and seed of the shape.
     pub shape: String,
+    /// The paint it was painted with.
+    pub paint: Paint,
+    /// The paint recovered.
+    pub recovered: Paint,
     /// Images the texture was recovered from.
     pub views: usize,
     /// Object PSNR (dB) of the reference renderer drawing the shape painted with the
@@ -179,6 +183,8 @@ pub fn evaluate_textures(
         let colour_error = if plain { err(est.paint.a, paint.a) } else { 0.5 * (err(est.paint.a, paint.a) + err(est.paint.b, paint.b)) };
         out.push(TextureError {
             shape: format!("{family:?} {seed}").to_lowercase(),
+            paint,
+            recovered: est.paint,
             views,
             novel_view_psnr: score(&painted(&est.paint)?)?,
             start_psnr: score(&painted(&est.start_paint)?)?,

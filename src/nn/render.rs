@@ -26,6 +26,11 @@ pub const TINY_AO_WEIGHTS: &[u8] = include_bytes!("../../weights/tiny-ao.safeten
 /// yet the crisp bands and lines.
 pub const TINY_TOON_WEIGHTS: &[u8] = include_bytes!("../../weights/tiny-toon.safetensors");
 
+/// The tiny preset trained for line drawings (`--shader contour`: occluding, crease and
+/// suggestive contours), started from the Phong weights' trunk and trained at 64^3
+/// (weights/README.md). Soft grey strokes where the reference draws crisp black ones.
+pub const TINY_CONTOUR_WEIGHTS: &[u8] = include_bytes!("../../weights/tiny-contour.safetensors");
+
 /// The tiny preset for coloured voxels (`.vox` palettes, mesh vertex colours, painted
 /// procedural shapes): the Phong weights widened to RGB input and albedo and fine-tuned on
 /// `dataset --colour` (weights/README.md). `render` picks it for a grid that has colour.
@@ -76,6 +81,7 @@ pub fn shipped_weights(preset: &Preset, shader: Shader) -> Option<&'static [u8]>
         ("nano", Shader::Phong) => Some(NANO_PHONG_WEIGHTS),
         ("tiny", Shader::AmbientOcclusion) => Some(TINY_AO_WEIGHTS),
         ("tiny", Shader::Toon) => Some(TINY_TOON_WEIGHTS),
+        ("tiny", Shader::Contour) => Some(TINY_CONTOUR_WEIGHTS),
         _ => None,
     }
 }
