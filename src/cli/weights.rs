@@ -13,7 +13,7 @@ use std::path::PathBuf;
 pub struct WeightsArgs {
     /// Weights: a safetensors file from `rendernet train` (<out>.weights.safetensors, or the
     /// checkpoint <out> itself, whose Adam state is ignored); default: the embedded weights of
-    /// --preset for the shader (Phong: tiny or nano; ao and toon: tiny).
+    /// --preset for the shader (Phong: tiny or nano; ao, toon and contour: tiny).
     #[arg(long)]
     pub weights: Option<PathBuf>,
     /// Network size the weights belong to: tiny (default), nano (faster, less accurate),
