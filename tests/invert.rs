@@ -396,7 +396,7 @@ fn invert_cli_with_texture_writes_a_painted_grid() {
     let o = run(&["invert", "--texture", "--out-voxels", dir.join("x.binvox").to_str().unwrap()]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("x.binvox") && err.contains(".vox"), "{err}");
-    let args = ["invert", "--texture", "--shape", "chair", "--seed", "9001", "--colour", "--candidates", "4", "--keep", "1", "--texture-steps", "2",
+    let args = ["invert", "--texture", "--shape", "chair", "--seed", "9001", "--colour", "--texture-starts", "4", "--texture-keep", "1", "--texture-steps", "2",
         "--json", "--out", out.to_str().unwrap(), "--out-voxels", vox.to_str().unwrap()];
     let o = run(&args);
     let text = String::from_utf8_lossy(&o.stdout);

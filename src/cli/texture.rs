@@ -21,11 +21,11 @@ pub struct TextureSearchArgs {
     /// Adam steps on the texture code per refined start.
     #[arg(long, default_value_t = TextureOptions::default().steps)]
     pub texture_steps: usize,
-    /// Paints of the training distribution scored as starting codes.
-    #[arg(long, default_value_t = TextureOptions::default().candidates)]
+    /// Paints of the training distribution scored as starting texture codes.
+    #[arg(long = "texture-starts", default_value_t = TextureOptions::default().candidates)]
     pub candidates: usize,
-    /// Best-scoring starts refined by Adam.
-    #[arg(long, default_value_t = TextureOptions::default().keep)]
+    /// Best-scoring texture starts refined by Adam.
+    #[arg(long = "texture-keep", default_value_t = TextureOptions::default().keep)]
     pub keep: usize,
 }
 
@@ -77,6 +77,9 @@ pub struct EvalTextureArgs {
 
 /// Recovers the paints of painted shapes and summarises how close they come.
 pub fn run(a: EvalTextureArgs) -> Result<()> {
+    if a.samples == 0 {
+        return Err(Error::Invalid("--samples 0: evaluate at least one painted shape".into()));
+    }
     let gpu = Gpu::new()?;
     let (inv, name) = colour_inverter(&a.net)?;
     let (tex, tex_name) = a.search.load()?;
