@@ -263,7 +263,7 @@ fn shape_search_lowers_the_image_loss() {
 fn multi_start_finds_the_training_code_that_rendered_the_images() {
     use rendernet::graph::Executor;
     use rendernet::invert::{ShapeOptions, ShapeView};
-    use rendernet::nn::camera::{grid_from_input_values, light_values, pose_for_view};
+    use rendernet::nn::camera::grid_from_input_values;
     use rendernet::nn::prior::{CodeStats, PriorPreset, ShapePrior, decoder_with_renderer};
     use rendernet::nn::rendernet::{Head, phong_of};
     let gpu = Gpu::new().unwrap();
@@ -296,16 +296,7 @@ fn multi_start_finds_the_training_code_that_rendered_the_images() {
     ex.keep(net.grid);
     let truth = &codes[6 * pp.latent..7 * pp.latent];
     ex.feed(&gpu, code, truth).unwrap();
-    let shots = [(View { azimuth: 35.0, elevation: 70.0, radius: 3.3 }, Light { azimuth: 30.0, elevation: 60.0, ..head_light }),
-                 (View { azimuth: 200.0, elevation: 100.0, radius: 3.5 }, Light { azimuth: 120.0, elevation: 80.0, ..head_light })];
-    let mut images = Vec::new();
-    for (view, light) in &shots {
-        ex.feed(&gpu, net.pose, &pose_for_view(view, p.input, p.cam, None)).unwrap();
-        ex.feed(&gpu, net.light.unwrap(), &light_values(light)).unwrap();
-        ex.forward(&gpu).unwrap();
-        let size = p.image_for(p.cam);
-        images.push(reference::Image { channels: 3, size, data: ex.read(&gpu, net.image).unwrap() });
-    }
+    let (shots, images) = two_shots(&gpu, &mut ex, &net, p.input, &p, head_light);
     let truth_grid = grid_from_input_values(&ex.read(&gpu, net.grid).unwrap(), pp.res).unwrap();
     let views: Vec<ShapeView> = images.iter().zip(&shots).map(|(image, (view, light))| ShapeView { image, view: *view, light: *light }).collect();
     let inv = Inverter::new(p, TINY_PHONG_WEIGHTS, "embedded", head_light);
@@ -336,7 +327,7 @@ fn multi_start_finds_the_training_code_that_rendered_the_images() {
 fn texture_search_finds_the_paint_that_rendered_the_images() {
     use rendernet::graph::Executor;
     use rendernet::invert::{ShapeView, TextureOptions, texture_starts};
-    use rendernet::nn::camera::{input_values, light_values, pose_for_view};
+    use rendernet::nn::camera::input_values;
     use rendernet::nn::render::TINY_PHONG_COLOUR_WEIGHTS;
     use rendernet::nn::rendernet::{Head, phong_of};
     use rendernet::nn::texture::{TEXTURE_SMALL_WEIGHTS, TexturePreset, decoder_with_renderer};
@@ -353,15 +344,7 @@ fn texture_search_finds_the_paint_that_rendered_the_images() {
     let starts = texture_starts(8);
     ex.feed(&gpu, code, &starts[5].code()).unwrap();
     ex.feed(&gpu, occupancy, &input_values(&shape.resample_to(tp.res).unwrap())).unwrap();
-    let shots = [(View { azimuth: 35.0, elevation: 70.0, radius: 3.3 }, Light { azimuth: 30.0, elevation: 60.0, ..head_light }),
-                 (View { azimuth: 200.0, elevation: 100.0, radius: 3.5 }, Light { azimuth: 120.0, elevation: 80.0, ..head_light })];
-    let mut images = Vec::new();
-    for (view, light) in &shots {
-        ex.feed(&gpu, net.pose, &pose_for_view(view, tp.res, rp.cam, None)).unwrap();
-        ex.feed(&gpu, net.light.unwrap(), &light_values(light)).unwrap();
-        ex.forward(&gpu).unwrap();
-        images.push(reference::Image { channels: 3, size: rp.image_for(rp.cam), data: ex.read(&gpu, net.image).unwrap() });
-    }
+    let (shots, images) = two_shots(&gpu, &mut ex, &net, tp.res, &rp, head_light);
     let views: Vec<ShapeView> = images.iter().zip(&shots).map(|(image, (view, light))| ShapeView { image, view: *view, light: *light }).collect();
     let inv = Inverter::new(rp, TINY_PHONG_COLOUR_WEIGHTS, "colour", head_light);
     let o = TextureOptions { steps: 3, candidates: 8, keep: 1, ..TextureOptions::default() };
@@ -411,4 +394,23 @@ fn invert_cli_with_texture_writes_a_painted_grid() {
     let png = image::open(&out).unwrap();
     assert_eq!((png.width(), png.height()), (384, 128));
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Two cameras and lights, and the network's full-frame images at them (`ex` runs `net`, its
+/// code already fed; `input` is the side of the grid it reads): the images the multi-start
+/// tests search for.
+fn two_shots(gpu: &Gpu, ex: &mut rendernet::graph::Executor, net: &rendernet::nn::rendernet::RenderNet, input: usize, p: &Preset, head_light: Light) -> ([(View, Light); 2], Vec<reference::Image>) {
+    use rendernet::nn::camera::{light_values, pose_for_view};
+    let shots = [(View { azimuth: 35.0, elevation: 70.0, radius: 3.3 }, Light { azimuth: 30.0, elevation: 60.0, ..head_light }),
+                 (View { azimuth: 200.0, elevation: 100.0, radius: 3.5 }, Light { azimuth: 120.0, elevation: 80.0, ..head_light })];
+    let images = shots
+        .iter()
+        .map(|(view, light)| {
+            ex.feed(gpu, net.pose, &pose_for_view(view, input, p.cam, None)).unwrap();
+            ex.feed(gpu, net.light.unwrap(), &light_values(light)).unwrap();
+            ex.forward(gpu).unwrap();
+            reference::Image { channels: 3, size: p.image_for(p.cam), data: ex.read(gpu, net.image).unwrap() }
+        })
+        .collect();
+    (shots, images)
 }

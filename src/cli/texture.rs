@@ -22,10 +22,10 @@ pub struct TextureSearchArgs {
     #[arg(long, default_value_t = TextureOptions::default().steps)]
     pub texture_steps: usize,
     /// Paints of the training distribution scored as starting texture codes.
-    #[arg(long = "texture-starts", default_value_t = TextureOptions::default().candidates)]
+    #[arg(long = "texture-starts", value_name = "N", default_value_t = TextureOptions::default().candidates)]
     pub candidates: usize,
     /// Best-scoring texture starts refined by Adam.
-    #[arg(long = "texture-keep", default_value_t = TextureOptions::default().keep)]
+    #[arg(long = "texture-keep", value_name = "N", default_value_t = TextureOptions::default().keep)]
     pub keep: usize,
 }
 
