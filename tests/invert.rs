@@ -369,7 +369,8 @@ fn texture_search_finds_the_paint_that_rendered_the_images() {
 
 /// `invert --texture`: the paint of a painted chair at the scene flags' camera and light,
 /// with a tiny search; the .vox file keeps colour, the three-panel picture and the JSON's
-/// scores come out, and a binvox output (no colour) is refused before any work.
+/// scores come out; a binvox output (no colour) is refused before any work, and grey
+/// weights with a message saying why.
 #[test]
 fn invert_cli_with_texture_writes_a_painted_grid() {
     let dir = std::env::temp_dir().join(format!("rendernet-invert-texture-test-{}", std::process::id()));
@@ -379,6 +380,9 @@ fn invert_cli_with_texture_writes_a_painted_grid() {
     let o = run(&["invert", "--texture", "--out-voxels", dir.join("x.binvox").to_str().unwrap()]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("x.binvox") && err.contains(".vox"), "{err}");
+    let o = run(&["invert", "--texture", "--preset", "nano", "--out", out.to_str().unwrap(), "--out-voxels", vox.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("grey grids") && err.contains("--colour"), "grey weights: {err}");
     let args = ["invert", "--texture", "--shape", "chair", "--seed", "9001", "--colour", "--texture-starts", "4", "--texture-keep", "1", "--texture-steps", "2",
         "--json", "--out", out.to_str().unwrap(), "--out-voxels", vox.to_str().unwrap()];
     let o = run(&args);

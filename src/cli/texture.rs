@@ -53,6 +53,11 @@ pub fn load_texture(path: Option<&Path>) -> Result<(Vec<u8>, String)> {
 /// The coloured RenderNet of `net` (its shipped colour weights without --weights).
 pub fn colour_inverter(net: &super::weights::WeightsArgs) -> Result<(Inverter, String)> {
     let (bytes, name) = net.load_for_grid(Shader::Phong, true)?;
+    if !rendernet::nn::render::weights_take_colour(&bytes, &name)? {
+        return Err(Error::Invalid(format!(
+            "{name} take grey grids; texture recovery needs a network trained on coloured voxels (shipped for --preset tiny; or --weights from `rendernet train` on a `dataset --colour` set)"
+        )));
+    }
     Ok((Inverter::new(net.preset()?.with_colour(), &bytes, &name, Light::default()), name))
 }
 
