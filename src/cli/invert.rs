@@ -164,7 +164,7 @@ impl InvertArgs {
 
 /// The format `--out-voxels` names: `binvox` (`vox` for a coloured grid) or `safetensors`,
 /// else an error.
-pub(crate) fn voxels_format(path: &std::path::Path, colour: bool) -> Result<&str> {
+pub(super) fn voxels_format(path: &std::path::Path, colour: bool) -> Result<&str> {
     match (path.extension().and_then(|e| e.to_str()), colour) {
         (Some(e @ "safetensors"), _) | (Some(e @ "binvox"), false) | (Some(e @ "vox"), true) => Ok(e),
         (_, false) => Err(Error::Invalid(format!("--out-voxels {}: write .binvox or .safetensors", path.display()))),

@@ -162,8 +162,8 @@ pub fn invert_texture(
     let est = inv.recover_texture(gpu, &TexturePreset::small(), &tex, grid, &one, &s.options())?;
     bar.finish_and_clear();
     let secs = t1.elapsed().as_secs_f64();
-    match out_voxels.extension().and_then(|e| e.to_str()) {
-        Some("vox") => rendernet::voxel::vox::write(&est.grid, out_voxels)?,
+    match super::invert::voxels_format(out_voxels, true)? {
+        "vox" => rendernet::voxel::vox::write(&est.grid, out_voxels)?,
         _ => rendernet::voxel::safetensors_io::write(&est.grid, out_voxels)?,
     }
     let turned = View { azimuth: (view.azimuth + 90.0) % 360.0, ..view };

@@ -113,7 +113,6 @@ impl CodeSearch {
         ex.training = false;
         ex.freeze_params();
         ex.want_grad(code);
-        ex.keep(net.grid);
         ex.keep(net.image);
         let targets: Vec<Vec<f32>> = views.iter().zip(&wins).map(|(v, w)| w.crop_rgb(v.image)).collect();
         let each = |f: &dyn Fn(usize) -> Vec<f32>| -> Vec<f32> { (0..n).flat_map(|k| f(k % views.len())).collect() };
@@ -183,14 +182,6 @@ impl CodeSearch {
             })
             .collect())
     }
-
-    /// The grid RenderNet reads for `code` (its input values `[C, R, R, R]`).
-    pub(super) fn decode(&mut self, gpu: &Gpu, code: &[f32]) -> Result<Vec<f32>> {
-        self.run(gpu, &[code], false)?;
-        let g = self.ex.read(gpu, self.net.grid)?;
-        let per = g.len() / (self.codes * self.views);
-        Ok(g[..per].to_vec())
-    }
 }
 
 fn mse(a: &[f32], b: &[f32]) -> f64 {
@@ -222,10 +213,6 @@ pub(super) struct Found {
     pub start: Vec<f32>,
     /// The winning start's loss after each step, best so far.
     pub curve: Vec<f64>,
-    /// The grid RenderNet reads for `code` and for `start` (input values).
-    pub grid: Vec<f32>,
-    /// The same for `start`.
-    pub start_grid: Vec<f32>,
 }
 
 /// Scores `starts` (at least one) by loss in batches of about 8 renders, refines the best
@@ -248,7 +235,6 @@ pub(super) fn search(inv: &Inverter, gpu: &Gpu, front: &Front, views: &[ShapeVie
     }
     scored.sort_by(|a, b| a.0.total_cmp(&b.0));
     let start = scored[0].1.clone();
-    let start_grid = scorer.decode(gpu, &start)?;
     drop(scorer);
     let mut one = CodeSearch::new(inv, gpu, front, views, 1, d.silhouette)?;
     let mut best: Option<(f64, Vec<f32>, Vec<f64>)> = None;
@@ -259,8 +245,7 @@ pub(super) fn search(inv: &Inverter, gpu: &Gpu, front: &Front, views: &[ShapeVie
         }
     }
     let (_, code, curve) = best.expect("at least one start");
-    let grid = one.decode(gpu, &code)?;
-    Ok(Found { code, start, curve, grid, start_grid })
+    Ok(Found { code, start, curve })
 }
 
 /// Adam on the code from `z`: the best (loss, code) met and the best-so-far curve.

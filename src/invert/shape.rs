@@ -113,8 +113,10 @@ impl Inverter {
         let penalty = |z: &[f32]| prior_term(z, stats.as_ref(), o.prior_weight);
         let d = Descent { steps: o.steps, lr: o.lr, keep: o.keep, silhouette: o.silhouette, penalty: &penalty };
         let f = code::search(self, gpu, &Front::Shape { preset: prior, weights: prior_weights }, views, starts, &d)?;
-        let grid = |v: &[f32]| camera::grid_from_input_values(v, prior.res);
-        Ok(ShapeEstimate { grid: grid(&f.grid)?, code: f.code, start_grid: grid(&f.start_grid)?, curve: f.curve })
+        // Both grids in one decoder-only batch (the renderer is not needed to decode).
+        let mut grids = decode_codes(gpu, prior, prior_weights, &[f.code.as_slice(), &f.start].concat())?;
+        let start_grid = grids.pop().expect("two codes decoded");
+        Ok(ShapeEstimate { grid: grids.pop().expect("two codes decoded"), code: f.code, start_grid, curve: f.curve })
     }
 }
 

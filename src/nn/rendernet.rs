@@ -261,9 +261,14 @@ impl Builder<'_> {
     /// A fully-connected layer on `[N, K, 1, 1]`: the projection op with weights `[O, K, 1, 1]`
     /// (PyTorch's Linear `[O, K]` with two unit axes).
     pub(crate) fn dense(&mut self, name: &str, x: Value, out: usize) -> Result<Value> {
+        self.dense_init(name, x, out, Init::Xavier, 0.001)
+    }
+
+    /// [`Builder::dense`] with the weights started by `init` and the bias at `bias`.
+    pub(crate) fn dense_init(&mut self, name: &str, x: Value, out: usize, init: Init, bias: f32) -> Result<Value> {
         let k = self.g.info(x).shape[1];
-        let w = self.param(&format!("{name}.weight"), &[out, k, 1, 1], Init::Xavier)?;
-        let b = self.param(&format!("{name}.bias"), &[out], Init::Constant(0.001))?;
+        let w = self.param(&format!("{name}.weight"), &[out, k, 1, 1], init)?;
+        let b = self.param(&format!("{name}.bias"), &[out], Init::Constant(bias))?;
         self.g.apply(name, Op::Projection, &[x, w, b])
     }
 

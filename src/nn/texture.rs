@@ -79,9 +79,7 @@ fn texture_grid(b: &mut Builder, p: &TexturePreset, code: Value) -> Result<Value
     let mut colour = |name: &str| -> Result<Value> {
         // Zero-initialised: Xavier weights start the colours ~0.7 off, which Adam at 1e-3
         // took hundreds of steps to undo; from zero the first steps fit the colours.
-        let w = b.param(&format!("{name}.weight"), &[3, TEXTURE_CODE, 1, 1], Init::Constant(0.0))?;
-        let bias = b.param(&format!("{name}.bias"), &[3], Init::Constant(0.0))?;
-        let c = b.g.apply(name, Op::Projection, &[code, w, bias])?;
+        let c = b.dense_init(name, code, 3, Init::Constant(0.0), 0.0)?;
         let c = b.g.apply(&format!("{name}.grid"), Op::Reshape(vec![n, 3, 1, 1, 1]), &[c])?;
         b.g.apply(&format!("{name}.painted"), Op::Expand(vec![p.res; 3]), &[c])
     };
