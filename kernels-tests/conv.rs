@@ -324,6 +324,18 @@ fn fast_small_channel_counts_forward_and_gradients() {
     check_fast(with(transposed3d([3, 2, 3], [1, 2, 2], explicit([1, 0, 2], [0, 1, 1]), None), 3, 3), 69);
 }
 
+/// Widths that are multiples of 4 (12 and 8, not powers of two), where the texture family
+/// packs its unfolded operands four voxels along W per load (`conv_fast_pack_tex_w4`): the
+/// forward's x and the backward passes' dy (12 wide at stride 1; 4 wide after stride 3), with
+/// channel counts that leave a part-filled quad (5 and 3 in, 7 and 6 out), 2 batch items.
+#[test]
+fn fast_widths_a_multiple_of_four() {
+    let with = |c: Case, ci: usize, co: usize, input: [usize; 3]| Case { ci, co, input, ..c };
+    check_fast(with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 5, 7, [3, 5, 12]), 90);
+    check_fast(with(conv2d([3, 3], [1, 1], Padding::Same), 3, 6, [1, 6, 8]), 91);
+    check_fast(with(conv2d([3, 3], [1, 3], Padding::Same), 6, 5, [1, 3, 12]), 92);
+}
+
 /// Runs all three passes of `c` with `kernel` on fixed random inputs; returns (y, dx, dw).
 fn passes(c: &Case, kernel: ConvKernel, seed: u64) -> [Vec<f64>; 3] {
     let g = geom(c);

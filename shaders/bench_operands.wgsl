@@ -9,6 +9,7 @@ struct Params { iters: u32, total: u32, div: u32, mask: u32, table: array<vec4<f
 @group(0) @binding(1) var<storage, read_write> out: array<f32>;
 @group(0) @binding(2) var<storage, read> buf: array<f32>;
 @group(0) @binding(3) var tex: texture_2d<f32>;
+@group(0) @binding(4) var stex: texture_storage_2d<rgba32float, read>;
 var<workgroup> wg: array<f32, 128>;
 
 // Dispatched with exactly p.total invocations (a multiple of 64): no early return, so the

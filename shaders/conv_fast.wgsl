@@ -201,15 +201,27 @@ fn xq(row: u32, w: i32, q: u32) -> vec4<f32> {
 
 // Writes 4 output channels co..co+3 at spatial offset `pos` of the output layout (plus
 // bias), skipping those past the tensor's edge.
-fn put(n: u32, co: u32, pos: u32, ow: u32, v: vec4<f32>) {
+// Bias of output channels co..co+3 (zero past the channel count or without a bias).
+fn bias4(co: u32) -> vec4<f32> {
+    if (p.has_bias == 0u) { return vec4<f32>(0.0); }
+    let last = p.co - 1u;
+    let b = vec4<f32>(fb[min(co, last)], fb[min(co + 1u, last)], fb[min(co + 2u, last)], fb[min(co + 3u, last)]);
+    return select(vec4<f32>(0.0), b, co + vec4<u32>(0u, 1u, 2u, 3u) < vec4<u32>(p.co));
+}
+
+// Writes channels co..co+3 of output position (pos, ow) as they are (those past co skipped).
+// Written out: a loop-indexed v[c] would live in memory on llvmpipe.
+fn put_raw(n: u32, co: u32, pos: u32, ow: u32, v: vec4<f32>) {
     if (ow >= p.ow) { return; }
-    for (var c = 0u; c < 4u; c++) {
-        if (co + c < p.co) {
-            var b = 0.0;
-            if (p.has_bias != 0u) { b = fb[co + c]; }
-            fy[(n * p.co + co + c) * p.ycs + pos] = v[c] + b;
-        }
-    }
+    let o = (n * p.co + co) * p.ycs + pos;
+    if (co < p.co) { fy[o] = v.x; }
+    if (co + 1u < p.co) { fy[o + p.ycs] = v.y; }
+    if (co + 2u < p.co) { fy[o + 2u * p.ycs] = v.z; }
+    if (co + 3u < p.co) { fy[o + 3u * p.ycs] = v.w; }
+}
+
+fn put(n: u32, co: u32, pos: u32, ow: u32, v: vec4<f32>) {
+    put_raw(n, co, pos, ow, v + bias4(co));
 }
 
 @compute @workgroup_size(64)

@@ -7,13 +7,16 @@
 // Why (measured on lavapipe 22.3 / LLVM 15, `rendernet bench`, see README "Benchmarks"):
 // llvmpipe turns every storage-buffer load, even one whose address is the same in all 8 SIMD
 // lanes, into a loop over the lanes with a branch per lane (~200 cycles per 8-lane vector on
-// AMD Zen 3), whereas a texel fetch is one gather (~60 cycles for an rgba32f texel, i.e. 4
-// vectors) and a subgroup shuffle is a register permute (~1 cycle). So these kernels put the
-// packed activations in a 3D rgba32f texture (texel = 4 channels of one voxel) and the packed
-// weights in a 2D rgba32f texture, map the 8 lanes of a subgroup to 8 consecutive outputs
-// along W, and let each lane fetch a different weight texel and hand it to the others with
-// subgroupShuffle instead of every lane fetching every weight. Requires subgroups of a
-// multiple of 8 lanes whose ids follow local_invocation_index (src/ops/conv_fast.rs checks).
+// AMD Zen 3), whereas a subgroup shuffle is a register permute (~1 cycle). So these kernels
+// put the packed activations in a 3D rgba32f texture (texel = 4 channels of one voxel) and
+// the packed weights in a 2D rgba32f texture, map the 8 lanes of a subgroup to 8 consecutive
+// outputs along W, and let each lane fetch a different weight texel and hand it to the others
+// with subgroupShuffle instead of every lane fetching every weight. The textures are bound
+// as read-only storage textures, not sampled ones: llvmpipe compiles a sampled textureLoad of
+// a format other than rgba8 into a call to a separate texel-fetch function (every live vector
+// register saved around it; 31% of a conv3d 16->16 forward's time on a Zen 3 by `perf`
+// samples of the JIT code), a storage-texture load inline. Requires subgroups of a multiple of
+// 8 lanes whose ids follow local_invocation_index (src/ops/conv_fast.rs checks).
 //
 // Activation texture: texel (w, h, (n * cq + q) * D + d) = channels 4q..4q+3 of voxel
 // (n, d, h, w), cq = cpad / 4. Weight texture: texel (cg * 16 + ci_in * 4 + o4, tap * cq + q)
@@ -23,23 +26,64 @@ fn tex_pos(n: u32, q: u32, d: u32, h: u32, w: u32) -> vec3<u32> {
 }
 
 // Same parameters as conv_fast_pack_folded (binding 1 is its source buffer `src`); with fold
-// sizes 1 (kh = kw = 1, stride 1, no padding) it is the plain channels-last packing.
+// sizes 1 (kh = kw = 1, stride 1, no padding) it is the plain channels-last packing. One
+// invocation per texel, dispatched as (ceil(oh * ow / 64), od, n * cq): the texel's depth and
+// (item, quad) come from the workgroup grid, leaving one division (by ow) per invocation where
+// a flat index needed five plus a folded-channel walk per quad (integer division is scalarised
+// per lane on llvmpipe). Measured on lavapipe 22.3 / AMD Zen 3: see README "Benchmarks".
 @group(0) @binding(2) var tdst: texture_storage_3d<rgba32float, write>;
 
 @compute @workgroup_size(64)
-fn conv_fast_pack_folded_tex(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let i = lin(gid, nwg);
-    if (i >= p.total) { return; }
-    let s = i % (p.od * p.oh * p.ow);
-    let n = i / (p.od * p.oh * p.ow);
-    let w = s % p.ow;
-    let h = (s / p.ow) % p.oh;
-    let d = s / (p.ow * p.oh);
-    var k = vec3<u32>(0u);
-    for (var q = 0u; q < p.cpad / 4u; q++) {
-        let v = folded_quad(n, &k, d, i32(h * p.sh) - i32(p.ph), i32(w * p.sw) - i32(p.pw));
-        textureStore(tdst, tex_pos(n, q, d, h, w), v);
-    }
+fn conv_fast_pack_folded_tex(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let hw = gid.x;
+    if (hw >= p.oh * p.ow) { return; }
+    let w = hw % p.ow;
+    let h = hw / p.ow;
+    let d = gid.y;
+    let cq = p.cpad / 4u;
+    let n = gid.z / cq;
+    let q = gid.z % cq;
+    // Folded channel 4q as the counter (c, a, b) folded_quad walks.
+    let c0 = 4u * q;
+    var k = vec3<u32>(c0 / (p.kh * p.kw), (c0 / p.kw) % p.kh, c0 % p.kw);
+    let v = folded_quad(n, &k, d, i32(h * p.sh) - i32(p.ph), i32(w * p.sw) - i32(p.pw));
+    textureStore(tdst, vec3<u32>(w, h, gid.z * p.od + d), v);
+}
+
+// The plain packing (no fold) when iw is a multiple of 4: each invocation reads one channel
+// quad at 4 consecutive voxels along W as 4 vec4 loads and writes their 4 texels. A storage
+// load on llvmpipe 22.3 is a loop over the 8 lanes (a vec4 costs about what a float does), so
+// this takes a quarter of the per-texel kernel's load loops. Dispatched as (ceil(oh * ow / 256),
+// od, n * cq); same parameters (od/oh/ow the destination, equal to the source's).
+@group(0) @binding(1) var<storage, read> src4: array<vec4<f32>>;
+
+// Channel c of item n at vec4 index s4 of its plane (4 voxels along W), zero past ci.
+fn src_quad(n: u32, c: u32, s4: u32, plane4: u32) -> vec4<f32> {
+    let v = src4[(n * p.ci + min(c, p.ci - 1u)) * plane4 + s4];
+    return select(vec4<f32>(0.0), v, c < p.ci);
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_pack_tex_w4(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let w4n = p.ow / 4u;
+    if (gid.x >= p.oh * w4n) { return; }
+    let w = (gid.x % w4n) * 4u;
+    let h = gid.x / w4n;
+    let d = gid.y;
+    let cq = p.cpad / 4u;
+    let n = gid.z / cq;
+    let c = 4u * (gid.z % cq);
+    let plane4 = p.od * p.oh * w4n;
+    let s4 = (d * p.oh + h) * w4n + w / 4u;
+    let r0 = src_quad(n, c, s4, plane4);
+    let r1 = src_quad(n, c + 1u, s4, plane4);
+    let r2 = src_quad(n, c + 2u, s4, plane4);
+    let r3 = src_quad(n, c + 3u, s4, plane4);
+    let z = gid.z * p.od + d;
+    textureStore(tdst, vec3<u32>(w, h, z), vec4<f32>(r0.x, r1.x, r2.x, r3.x));
+    textureStore(tdst, vec3<u32>(w + 1u, h, z), vec4<f32>(r0.y, r1.y, r2.y, r3.y));
+    textureStore(tdst, vec3<u32>(w + 2u, h, z), vec4<f32>(r0.z, r1.z, r2.z, r3.z));
+    textureStore(tdst, vec3<u32>(w + 3u, h, z), vec4<f32>(r0.w, r1.w, r2.w, r3.w));
 }
 
 // Same parameters as conv_fast_pack_weights; one invocation per texel.
@@ -64,14 +108,14 @@ fn conv_fast_pack_weights_tex(@builtin(global_invocation_id) gid: vec3<u32>, @bu
 // ---- forward: a subgroup of 8 lanes = 8 outputs along W; each lane 8 rows (H) x 16 channels --
 // 8 rows rather than 4: each shared weight set then feeds twice the FMAs (measured 1.25x on
 // conv3d 16->16 3^3 on 32^3; the accumulators live in memory either way on lavapipe).
-@group(0) @binding(1) var tx: texture_3d<f32>;
-@group(0) @binding(2) var tw: texture_2d<f32>;
+@group(0) @binding(1) var tx: texture_storage_3d<rgba32float, read>;
+@group(0) @binding(2) var tw: texture_storage_2d<rgba32float, read>;
 
 // Activation texel of channel quad `q` at input (zd, zh, zw) of item n, zero off the grid.
 fn tex_x(n: u32, q: u32, zd: u32, zh: i32, zw: i32) -> vec4<f32> {
     let inside = zh >= 0 && zh < i32(p.ih) && zw >= 0 && zw < i32(p.iw);
     let c = vec3<i32>(clamp(zw, 0, i32(p.iw) - 1), clamp(zh, 0, i32(p.ih) - 1), i32((n * (p.cpad / 4u) + q) * p.id + zd));
-    return select(vec4<f32>(0.0), textureLoad(tx, c, 0), inside);
+    return select(vec4<f32>(0.0), textureLoad(tx, c), inside);
 }
 
 // One row's 16 accumulators += x (4 input channels) times the broadcast weights.
@@ -89,8 +133,8 @@ fn mac(acc: Acc, x: vec4<f32>, w: W16) -> Acc {
 
 fn put_row(n: u32, co: u32, pos: u32, ow: u32, oh: u32, a: Acc) {
     if (oh >= p.oh) { return; }
-    put(n, co, pos, ow, a.a0); put(n, co + 4u, pos, ow, a.a1);
-    put(n, co + 8u, pos, ow, a.a2); put(n, co + 12u, pos, ow, a.a3);
+    put_raw(n, co, pos, ow, a.a0); put_raw(n, co + 4u, pos, ow, a.a1);
+    put_raw(n, co + 8u, pos, ow, a.a2); put_raw(n, co + 12u, pos, ow, a.a3);
 }
 
 // (tile, lane, base): a tile is 8 lanes, a workgroup's tiles its 8 groups of 8 invocations;
@@ -131,7 +175,9 @@ fn conv_fast_forward_tex(ids: LaneIds) {
     let ft = fwd_tile(t, lane);
     let n = ft.n; let cg = ft.cg; let od = ft.od; let oh0 = ft.oh0; let ow = ft.ow;
     let cq = p.cpad / 4u;
-    var a0 = Acc(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    // Accumulators start at the bias: 16 loads a tile instead of one per value written.
+    let co = cg * 16u;
+    var a0 = Acc(bias4(co), bias4(co + 4u), bias4(co + 8u), bias4(co + 12u));
     var a1 = a0; var a2 = a0; var a3 = a0; var a4 = a0; var a5 = a0; var a6 = a0; var a7 = a0;
     for (var kd = 0u; kd < p.kd; kd++) {
         let zd = i32(od * p.sd + kd) - i32(p.pd);
@@ -146,8 +192,8 @@ fn conv_fast_forward_tex(ids: LaneIds) {
                     // Lane l fetches weight texels l and 8 + l of this (tap, q, cg): input
                     // channel l / 4 (then 2 + l / 4), output quad l % 4.
                     let wy = i32(tap * cq + q);
-                    let wa = textureLoad(tw, vec2<i32>(i32(cg * 16u + lane), wy), 0);
-                    let wv = textureLoad(tw, vec2<i32>(i32(cg * 16u + 8u + lane), wy), 0);
+                    let wa = textureLoad(tw, vec2<i32>(i32(cg * 16u + lane), wy));
+                    let wv = textureLoad(tw, vec2<i32>(i32(cg * 16u + 8u + lane), wy));
                     // Written out: llvmpipe does not unroll loops, and a loop-indexed array
                     // would live in memory.
                     let w = W16(array<vec4<f32>, 16>(
@@ -169,7 +215,6 @@ fn conv_fast_forward_tex(ids: LaneIds) {
     }
     if (ow >= p.ow) { return; }
     let pos = p.yoff + od * p.ysd + oh0 * p.ysh + ow * p.ysw;
-    let co = cg * 16u;
     put_row(n, co, pos, ow, oh0, a0);
     put_row(n, co, pos + p.ysh, ow, oh0 + 1u, a1);
     put_row(n, co, pos + 2u * p.ysh, ow, oh0 + 2u, a2);
@@ -193,7 +238,7 @@ fn mac8(acc: Acc8, x: vec4<f32>, w: array<vec4<f32>, 8>) -> Acc8 {
 
 fn put_row8(n: u32, pos: u32, ow: u32, oh: u32, a: Acc8) {
     if (oh >= p.oh) { return; }
-    put(n, 0u, pos, ow, a.a0); put(n, 4u, pos, ow, a.a1);
+    put_raw(n, 0u, pos, ow, a.a0); put_raw(n, 4u, pos, ow, a.a1);
 }
 
 @compute @workgroup_size(64)
@@ -208,7 +253,7 @@ fn conv_fast_forward_tex8(ids: LaneIds) {
     let n = ft.n; let od = ft.od; let oh0 = ft.oh0; let ow = ft.ow;
     let cq = p.cpad / 4u;
     let wx = i32((lane / 2u) * 4u + (lane & 1u));
-    var a0 = Acc8(vec4<f32>(0.0), vec4<f32>(0.0));
+    var a0 = Acc8(bias4(0u), bias4(4u));
     var a1 = a0; var a2 = a0; var a3 = a0; var a4 = a0; var a5 = a0; var a6 = a0; var a7 = a0;
     for (var kd = 0u; kd < p.kd; kd++) {
         let zd = i32(od * p.sd + kd) - i32(p.pd);
@@ -220,7 +265,7 @@ fn conv_fast_forward_tex8(ids: LaneIds) {
                 let zw = i32(ow * p.sw + kw) - i32(p.pw);
                 let tap = (kd * p.kh + kh) * p.kw + kw;
                 for (var q = 0u; q < cq; q++) {
-                    let wa = textureLoad(tw, vec2<i32>(wx, i32(tap * cq + q)), 0);
+                    let wa = textureLoad(tw, vec2<i32>(wx, i32(tap * cq + q)));
                     let w = array<vec4<f32>, 8>(
                         subgroupShuffle(wa, base), subgroupShuffle(wa, base + 1u), subgroupShuffle(wa, base + 2u), subgroupShuffle(wa, base + 3u),
                         subgroupShuffle(wa, base + 4u), subgroupShuffle(wa, base + 5u), subgroupShuffle(wa, base + 6u), subgroupShuffle(wa, base + 7u));
@@ -257,7 +302,7 @@ fn mac4(a: vec4<f32>, x: vec4<f32>, w0: vec4<f32>, w1: vec4<f32>, w2: vec4<f32>,
 }
 
 fn put4(n: u32, pos: u32, ow: u32, oh: u32, a: vec4<f32>) {
-    if (oh < p.oh) { put(n, 0u, pos, ow, a); }
+    if (oh < p.oh) { put_raw(n, 0u, pos, ow, a); }
 }
 
 @compute @workgroup_size(64)
@@ -271,7 +316,7 @@ fn conv_fast_forward_tex4(ids: LaneIds) {
     let ft = fwd_tile(t, lane);
     let n = ft.n; let od = ft.od; let oh0 = ft.oh0; let ow = ft.ow;
     let cq = p.cpad / 4u;
-    var a0 = vec4<f32>(0.0);
+    var a0 = bias4(0u);
     var a1 = a0; var a2 = a0; var a3 = a0; var a4 = a0; var a5 = a0; var a6 = a0; var a7 = a0;
     for (var kd = 0u; kd < p.kd; kd++) {
         let zd = i32(od * p.sd + kd) - i32(p.pd);
@@ -283,7 +328,7 @@ fn conv_fast_forward_tex4(ids: LaneIds) {
                 let zw = i32(ow * p.sw + kw) - i32(p.pw);
                 let tap = (kd * p.kh + kh) * p.kw + kw;
                 for (var q = 0u; q < cq; q++) {
-                    let wa = textureLoad(tw, vec2<i32>(i32((lane & 3u) * 4u), i32(tap * cq + q)), 0);
+                    let wa = textureLoad(tw, vec2<i32>(i32((lane & 3u) * 4u), i32(tap * cq + q)));
                     let w0 = subgroupShuffle(wa, base); let w1 = subgroupShuffle(wa, base + 1u);
                     let w2 = subgroupShuffle(wa, base + 2u); let w3 = subgroupShuffle(wa, base + 3u);
                     a0 = mac4(a0, tex_x(n, q, u32(zd), zh, zw), w0, w1, w2, w3);
@@ -319,8 +364,8 @@ fn conv_fast_forward_tex4(ids: LaneIds) {
 // Writes part[chunk][tap][cpad][copad] like conv_fast_backward_weight; conv_fast_weight_sum
 // adds the chunks. Params: the (folded) dispatch geometry; cpad of x, co16 of dy; nchunks,
 // chunk (rows per chunk), total = tiles.
-@group(0) @binding(1) var bx: texture_3d<f32>;    // packed x (as tx)
-@group(0) @binding(2) var bdy: texture_3d<f32>;   // packed dy: quads co16 * 4 per item
+@group(0) @binding(1) var bx: texture_storage_3d<rgba32float, read>;    // packed x (as tx)
+@group(0) @binding(2) var bdy: texture_storage_3d<rgba32float, read>;   // packed dy: quads co16 * 4 per item
 @group(0) @binding(3) var<storage, read_write> bpart: array<f32>;
 
 struct Acc16 { a: array<vec4<f32>, 16> }
@@ -342,7 +387,7 @@ fn bw_x(n: u32, q: u32, zd: i32, zh: i32, zw: i32) -> vec4<f32> {
     let inside = zd >= 0 && zd < i32(p.id) && zh >= 0 && zh < i32(p.ih) && zw >= 0 && zw < i32(p.iw);
     let c = vec3<i32>(clamp(zw, 0, i32(p.iw) - 1), clamp(zh, 0, i32(p.ih) - 1),
                       i32((n * (p.cpad / 4u) + q) * p.id) + clamp(zd, 0, i32(p.id) - 1));
-    return select(vec4<f32>(0.0), textureLoad(bx, c, 0), inside);
+    return select(vec4<f32>(0.0), textureLoad(bx, c), inside);
 }
 
 // Weight-gradient tile `t` (groups of 8 (tap, channel quad) pairs, per output channel group
@@ -388,10 +433,10 @@ fn conv_fast_backward_weight_tex(ids: LaneIds) {
             let ok = mine < p.ow;
             let dc = vec3<i32>(i32(min(mine, p.ow - 1u)), i32(oh), dz);
             let od_ = i32(p.od);
-            let g0 = select(vec4<f32>(0.0), textureLoad(bdy, dc, 0), ok);
-            let g1 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, od_), 0), ok);
-            let g2 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, 2 * od_), 0), ok);
-            let g3 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, 3 * od_), 0), ok);
+            let g0 = select(vec4<f32>(0.0), textureLoad(bdy, dc), ok);
+            let g1 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, od_)), ok);
+            let g2 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, 2 * od_)), ok);
+            let g3 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, 3 * od_)), ok);
             let zw = i32(ow0 * p.sw + kw) - i32(p.pw);
             let s = i32(p.sw);
             // Written out: llvmpipe does not unroll loops.
@@ -451,7 +496,7 @@ fn conv_fast_backward_weight_tex4(ids: LaneIds) {
             // Lane l fetches the dy texel at ow0 + l (zero past the row's end).
             let mine = ow0 + lane;
             let dc = vec3<i32>(i32(min(mine, p.ow - 1u)), i32(at.oh), i32(n * p.od + at.od));
-            let g = select(vec4<f32>(0.0), textureLoad(bdy, dc, 0), mine < p.ow);
+            let g = select(vec4<f32>(0.0), textureLoad(bdy, dc), mine < p.ow);
             let zw = i32(ow0 * p.sw + k.z) - i32(p.pw);
             let s = i32(p.sw);
             acc = bw_step4(acc, bw_x(n, q, zd, zh, zw), g, base);

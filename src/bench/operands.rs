@@ -17,7 +17,7 @@ struct Kind {
     body: &'static str,
 }
 
-const KINDS: [Kind; 11] = [
+const KINDS: [Kind; 13] = [
     Kind { operand: "none (plain FMA)", address: "-", body: "return x;" },
     Kind { operand: "storage-buffer load", address: "per lane", body: "return buf[(i * 7u + it * 64u + k * 13u) & p.mask];" },
     Kind { operand: "storage-buffer load", address: "same in all lanes", body: "return buf[(it * 64u + k * 13u) & p.mask];" },
@@ -32,6 +32,16 @@ const KINDS: [Kind; 11] = [
         operand: "rgba32f texel fetch (4 floats)",
         address: "same in all lanes",
         body: "let t = textureLoad(tex, vec2<u32>(k, it & 63u), 0); return t.x + t.y + t.z + t.w;",
+    },
+    Kind {
+        operand: "rgba32f storage-texture load (4 floats)",
+        address: "per lane",
+        body: "let t = textureLoad(stex, vec2<u32>((i + k) & 63u, it & 63u)); return t.x + t.y + t.z + t.w;",
+    },
+    Kind {
+        operand: "rgba32f storage-texture load (4 floats)",
+        address: "same in all lanes",
+        body: "let t = textureLoad(stex, vec2<u32>(k, it & 63u)); return t.x + t.y + t.z + t.w;",
     },
     Kind { operand: "workgroup-memory load", address: "per lane", body: "return wg[(i + it + k) & 127u];" },
     Kind { operand: "workgroup-memory load", address: "same in all lanes", body: "return wg[(it + k) & 127u];" },
@@ -76,7 +86,13 @@ pub fn operand_costs(gpu: &Gpu, clock: Clock, samples: usize, ceiling: f64) -> R
     let tex = gpu.scratch_texture([64, 64, 1], wgpu::TextureDimension::D2);
     let table = std::array::from_fn(|r| std::array::from_fn(|c| (r * 4 + c) as f32 * 1e-3));
     let params = Params { iters, total, div: 7, mask: 4095, table };
-    let args = [Arg::W(&out), Arg::R(&buf), Arg::Texture(&tex, wgpu::TextureViewDimension::D2)];
+    let stex = gpu.scratch_texture([64, 64, 1], wgpu::TextureDimension::D2);
+    let args = [
+        Arg::W(&out),
+        Arg::R(&buf),
+        Arg::Texture(&tex, wgpu::TextureViewDimension::D2),
+        Arg::ReadStorageTexture(&stex, wgpu::TextureViewDimension::D2),
+    ];
     // Vector operations per call: 8 lanes a vector, 8 accumulators an iteration; threads add up.
     let vector_ops = total as f64 / 8.0 * iters as f64 * 8.0;
     let threads = cpu_threads();

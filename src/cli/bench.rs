@@ -365,6 +365,9 @@ fn operands(gpu: &Gpu, clock: Clock, repeat: usize, json: bool) -> Result<()> {
     if !gpu.has_subgroups_of_8() {
         return Err(rendernet::Error::Invalid("--operands times a subgroup shuffle, which this adapter lacks".into()));
     }
+    if !gpu.reads_rgba32f_storage() {
+        return Err(rendernet::Error::Invalid("--operands times a read-only storage-texture load, which this adapter lacks".into()));
+    }
     let (cpu, ceiling) = (bench::cpu_model(), bench::fma_ceiling(gpu, clock, 5)?);
     let costs = bench::operands::operand_costs(gpu, clock, repeat, ceiling)?;
     if json {

@@ -152,9 +152,13 @@ pub(crate) fn open() -> Result<Opened> {
     };
     let info = adapter.get_info();
     let limits = adapter.limits();
-    // Only features we use: timestamps for `bench`; subgroups for the texture conv kernels,
-    // which fall back to the storage-buffer ones where they are missing.
-    let wanted = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES | wgpu::Features::SUBGROUP;
+    // Only features we use: timestamps for `bench`; subgroups and read-only storage textures
+    // (adapter-specific format features) for the texture conv kernels, which fall back to the
+    // storage-buffer ones where either is missing.
+    let wanted = wgpu::Features::TIMESTAMP_QUERY
+        | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES
+        | wgpu::Features::SUBGROUP
+        | wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
     let features = adapter.features() & wanted;
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some("rendernet"),

@@ -77,6 +77,8 @@ pub enum Arg<'a> {
     Texture(&'a wgpu::TextureView, wgpu::TextureViewDimension),
     /// A write-only rgba32float storage texture of the given dimension.
     StorageTexture(&'a wgpu::TextureView, wgpu::TextureViewDimension),
+    /// A read-only rgba32float storage texture of the given dimension.
+    ReadStorageTexture(&'a wgpu::TextureView, wgpu::TextureViewDimension),
 }
 
 impl Arg<'_> {
@@ -86,6 +88,11 @@ impl Arg<'_> {
                 sample_type: wgpu::TextureSampleType::Float { filterable: false },
                 view_dimension,
                 multisampled: false,
+            },
+            Arg::ReadStorageTexture(_, view_dimension) => wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::ReadOnly,
+                format: wgpu::TextureFormat::Rgba32Float,
+                view_dimension,
             },
             Arg::StorageTexture(_, view_dimension) => wgpu::BindingType::StorageTexture {
                 access: wgpu::StorageTextureAccess::WriteOnly,
@@ -191,7 +198,7 @@ impl Gpu {
             let resource = match a {
                 Arg::R(t) | Arg::W(t) => t.buffer().as_entire_binding(),
                 Arg::Absent => self.dummy.as_entire_binding(),
-                Arg::Texture(v, _) | Arg::StorageTexture(v, _) => wgpu::BindingResource::TextureView(v),
+                Arg::Texture(v, _) | Arg::StorageTexture(v, _) | Arg::ReadStorageTexture(v, _) => wgpu::BindingResource::TextureView(v),
             };
             entries.push(wgpu::BindGroupEntry { binding: i as u32 + 1, resource });
         }

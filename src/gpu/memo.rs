@@ -106,7 +106,7 @@ impl Memo {
         let resources: Vec<Res> = args.iter().map(|a| match a {
             super::Arg::R(t) | super::Arg::W(t) => Res::Buffer(t.buffer().clone()),
             super::Arg::Absent => Res::Absent,
-            super::Arg::Texture(v, _) | super::Arg::StorageTexture(v, _) => Res::View((*v).clone()),
+            super::Arg::Texture(v, _) | super::Arg::StorageTexture(v, _) | super::Arg::ReadStorageTexture(v, _) => Res::View((*v).clone()),
         }).collect();
         let size = params.len() as u64;
         let offset = ((k % CHUNK_SLOTS) as u64 * SLOT) as u32;

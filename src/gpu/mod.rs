@@ -93,6 +93,12 @@ impl Gpu {
             && self.info.subgroup_max_size % 8 == 0
     }
 
+    /// Whether rgba32float textures can be bound as read-only storage textures (how the texture
+    /// conv kernels read their operands).
+    pub fn reads_rgba32f_storage(&self) -> bool {
+        self.features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES)
+    }
+
     /// Whether GPU timestamps can be taken inside compute passes.
     pub fn has_timestamps(&self) -> bool {
         self.features.contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES)

@@ -138,14 +138,14 @@ pub(crate) enum Operands {
 /// lavapipe runs on (texture fetches against per-lane buffer loads).
 pub(crate) fn calibrated(gpu: &Gpu) -> Operands {
     let textures = *gpu.conv_textures.get_or_init(|| {
-        if !gpu.has_subgroups_of_8() {
+        if !gpu.has_subgroups_of_8() || !gpu.reads_rgba32f_storage() {
             return false;
         }
         match std::env::var("RENDERNET_CONV_OPERANDS").as_deref() {
             Ok("buffers") => false,
             Ok("textures") => true,
             // A failed measurement keeps the buffers, which work everywhere.
-            _ => gpu.calibrated_choice("conv-textures-v1", || measure(gpu).unwrap_or(false)),
+            _ => gpu.calibrated_choice("conv-textures-v2", || measure(gpu).unwrap_or(false)),
         }
     });
     if textures { Operands::Textures } else { Operands::Buffers }
@@ -186,7 +186,7 @@ impl Packed {
     fn arg(&self) -> Arg<'_> {
         match self {
             Packed::Buffer(t) => Arg::R(t),
-            Packed::Texture(v, d) => Arg::Texture(v, *d),
+            Packed::Texture(v, d) => Arg::ReadStorageTexture(v, *d),
         }
     }
 }
@@ -200,7 +200,7 @@ fn texture(gpu: &Gpu, size: [usize; 3], dim: wgpu::TextureDimension) -> (wgpu::T
 
 /// Whether `ops` asks for textures and the device can run the texture kernels.
 fn textures_wanted(gpu: &Gpu, ops: Operands) -> bool {
-    ops == Operands::Textures && gpu.has_subgroups_of_8()
+    ops == Operands::Textures && gpu.has_subgroups_of_8() && gpu.reads_rgba32f_storage()
 }
 
 /// Whether `n` items of `cpad` packed channels over `input` fit one 3D texture (`pack_x`).
@@ -229,7 +229,15 @@ fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded,
     // Without a fold the folded packing's parameters make it the plain packing.
     let p = folded_params(g, f, cpad);
     let args = [Arg::R(x), Arg::StorageTexture(&view, dim)];
-    dispatch(gpu, pass, "conv_fast_pack_folded_tex", p, &args, g.n * volume(f.g.input))?;
+    // Grids: (h, w) or (h, w / 4) along x, depth along y, (item, channel quad) along z.
+    let zq = (g.n * cpad / 4) as u32;
+    if f.fold() == 1 && iw % 4 == 0 {
+        let grid = [(ih * iw / 4).div_ceil(64) as u32, id as u32, zq];
+        gpu.dispatch(pass, TEX_SHADER, "conv_fast_pack_tex_w4", &p, &args, grid)?;
+    } else {
+        let grid = [(ih * iw).div_ceil(64) as u32, id as u32, zq];
+        gpu.dispatch(pass, TEX_SHADER, "conv_fast_pack_folded_tex", &p, &args, grid)?;
+    }
     Ok(Packed::Texture(view, dim))
 }
 
