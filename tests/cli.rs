@@ -489,13 +489,21 @@ fn render_picks_the_fastest_shipped_model_that_meets_the_target() {
     let dir = scratch("quality");
     let png = dir.join("q.png");
     let p = png.to_str().unwrap();
-    for (flags, model) in [(&["--quality", "fast"][..], "nano"), (&["--quality", "best"], "tiny"), (&["--target-psnr", "19"], "nano"), (&["--target-psnr", "20"], "tiny")] {
+    let picks = [
+        (&["--quality", "fast"][..], "nano"),
+        (&["--quality", "balanced"], "tiny"),
+        (&["--quality", "best"], "base"),
+        (&["--target-psnr", "19"], "nano"),
+        (&["--target-psnr", "20"], "tiny"),
+        (&["--target-psnr", "23"], "base"),
+    ];
+    for (flags, model) in picks {
         let out = run_ok(&[&["render", "--size", "32", "--out", p][..], flags].concat());
         assert!(out.contains(&format!("embedded {model}-phong weights (held-out object PSNR")), "{flags:?}: {out}");
     }
     let out = rendernet().args(["render", "--target-psnr", "40", "--out", p]).output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success() && err.contains("--target-psnr 40") && err.contains("'tiny'"), "{err}");
+    assert!(!out.status.success() && err.contains("--target-psnr 40") && err.contains("'base'"), "{err}");
     let out = rendernet().args(["render", "--quality", "fast", "--weights", "w.safetensors", "--out", p]).output().unwrap();
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("--weights"));
     let _ = std::fs::remove_dir_all(&dir);

@@ -383,9 +383,9 @@ fn operands(gpu: &Gpu, clock: Clock, repeat: usize, json: bool) -> Result<()> {
     println!("adapter: {}\ncpu:     {}", gpu.info.name, cpu.as_deref().unwrap_or("unknown"));
     println!("FMA ceiling (shaders/bench_fma.wgsl, best of 5): {ceiling:.1} GFLOP/s");
     println!("One operand per FMA (shaders/bench_operands.wgsl), ns per 8-lane vector op over all CPU threads, best of {repeat}:");
-    println!("{:<34} {:<18} {:>9} {:>13} {:>16}", "operand", "address", "ns", "beyond FMA", "ceiling FMAs");
+    println!("{:<40} {:<18} {:>9} {:>13} {:>16}", "operand", "address", "ns", "beyond FMA", "ceiling FMAs");
     for c in &costs {
-        println!("{:<34} {:<18} {:>9.2} {:>13.2} {:>16.1}", c.operand, c.address, c.ns_per_vector, c.extra_ns, c.extra_in_fmas);
+        println!("{:<40} {:<18} {:>9.2} {:>13.2} {:>16.1}", c.operand, c.address, c.ns_per_vector, c.extra_ns, c.extra_in_fmas);
     }
     // What the loop itself costs: the plain FMA row against an FMA at the ceiling.
     let loop_fma = costs[0].ns_per_vector / bench::operands::ceiling_fma_ns(ceiling);

@@ -6,7 +6,7 @@ use clap::Args;
 use rendernet::chart::{self, Cap, Options};
 use rendernet::data::Dataset;
 use rendernet::metrics::PSNR_CAP;
-use rendernet::nn::render::{CROP_MARGIN, NANO_PHONG_WEIGHTS, Renderer, TINY_PHONG_WEIGHTS};
+use rendernet::nn::render::{BASE_PHONG_WEIGHTS, CROP_MARGIN, NANO_PHONG_WEIGHTS, Renderer, TINY_PHONG_WEIGHTS};
 use rendernet::train::{eval::evaluate_bytes, head_for};
 use rendernet::{Error, Gpu, Light, Preset, RayMarcher, Result, Shader, View, bench};
 use serde_json::json;
@@ -134,7 +134,7 @@ fn median_ms(repeat: usize, mut f: impl FnMut() -> Result<()>) -> Result<f64> {
 pub fn run(a: FrontierArgs) -> Result<()> {
     super::output::check_png_out(&a.out)?;
     let shipped = |p: Preset, w: &[u8]| Model::new(format!("{} (shipped)", p.name), p, w.to_vec(), "embedded".into());
-    let mut models = vec![shipped(Preset::nano(), NANO_PHONG_WEIGHTS)?, shipped(Preset::tiny(), TINY_PHONG_WEIGHTS)?];
+    let mut models = vec![shipped(Preset::nano(), NANO_PHONG_WEIGHTS)?, shipped(Preset::tiny(), TINY_PHONG_WEIGHTS)?, shipped(Preset::base(), BASE_PHONG_WEIGHTS)?];
     for m in &a.models {
         models.push(parse_model(m)?);
     }

@@ -13,7 +13,7 @@ use std::path::PathBuf;
 pub struct WeightsArgs {
     /// Weights: a safetensors file from `rendernet train` (<out>.weights.safetensors, or the
     /// checkpoint <out> itself, whose Adam state is ignored); default: the embedded weights of
-    /// --preset for the shader (Phong: tiny or nano; ao, toon and contour: tiny).
+    /// --preset for the shader (Phong: nano, tiny or base; ao, toon and contour: tiny).
     #[arg(long)]
     pub weights: Option<PathBuf>,
     /// Network size the weights belong to: tiny (default), nano (faster, less accurate),
@@ -22,7 +22,7 @@ pub struct WeightsArgs {
     #[arg(long, default_value = "tiny")]
     pub preset: String,
     /// Pick the shipped Phong model instead of --preset: fast (nano), balanced (tiny) or best
-    /// (the most accurate shipped); their measured speed and accuracy are in the README.
+    /// (base, the most accurate); their measured speed and accuracy are in the README.
     #[arg(long, value_enum, conflicts_with_all = ["weights", "target_psnr"])]
     pub quality: Option<Quality>,
     /// Pick the fastest shipped Phong model whose held-out object PSNR (README table) is at

@@ -15,7 +15,7 @@ use crate::ops::loss::Loss;
 
 /// The shipped shape prior ([`PriorPreset::small`]) trained on procedural chairs, with its
 /// code statistics (see `weights/README.md`).
-pub const PRIOR_CHAIRS_WEIGHTS: &[u8] = include_bytes!("../../weights/prior-chairs.safetensors");
+pub static PRIOR_CHAIRS_WEIGHTS: &[u8] = include_bytes!("../../weights/prior-chairs.safetensors");
 
 /// Sizes of a shape autoencoder.
 #[derive(Clone, Debug, PartialEq)]

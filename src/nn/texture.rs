@@ -16,7 +16,7 @@ use crate::voxel::shapes::{Paint, TEXTURE_CODE};
 /// The shipped texture decoder ([`TexturePreset::small`], trained by `rendernet
 /// train-texture`; weights/README.md has the command and log): what texture recovery uses
 /// without a weights file.
-pub const TEXTURE_SMALL_WEIGHTS: &[u8] = include_bytes!("../../weights/texture-small.safetensors");
+pub static TEXTURE_SMALL_WEIGHTS: &[u8] = include_bytes!("../../weights/texture-small.safetensors");
 
 /// Sizes of a texture decoder (the code length is [`TEXTURE_CODE`]).
 #[derive(Clone, Debug, PartialEq)]
