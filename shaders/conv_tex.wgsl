@@ -14,8 +14,8 @@
 // with subgroupShuffle instead of every lane fetching every weight. The textures are bound
 // as read-only storage textures, not sampled ones: llvmpipe compiles a sampled textureLoad of
 // a format other than rgba8 into a call to a separate texel-fetch function (every live vector
-// register saved around it; 31% of a conv3d 16->16 forward's time on a Zen 3 by `perf`
-// samples of the JIT code), a storage-texture load inline. Requires subgroups of a multiple of
+// register saved around it; 31% of the samples of conv3d 16->16's three passes on a Zen 3,
+// by `perf` on the JIT code: ci/jit-profile.sh), a storage-texture load inline. Requires subgroups of a multiple of
 // 8 lanes whose ids follow local_invocation_index (src/ops/conv_fast.rs checks).
 //
 // Activation texture: texel (w, h, (n * cq + q) * D + d) = channels 4q..4q+3 of voxel
