@@ -199,8 +199,6 @@ fn xq(row: u32, w: i32, q: u32) -> vec4<f32> {
     return select(vec4<f32>(0.0), v, inside);
 }
 
-// Writes 4 output channels co..co+3 at spatial offset `pos` of the output layout (plus
-// bias), skipping those past the tensor's edge.
 // Bias of output channels co..co+3 (zero past the channel count or without a bias).
 fn bias4(co: u32) -> vec4<f32> {
     if (p.has_bias == 0u) { return vec4<f32>(0.0); }
@@ -209,7 +207,8 @@ fn bias4(co: u32) -> vec4<f32> {
     return select(vec4<f32>(0.0), b, co + vec4<u32>(0u, 1u, 2u, 3u) < vec4<u32>(p.co));
 }
 
-// Writes channels co..co+3 of output position (pos, ow) as they are (those past co skipped).
+// Writes output channels co..co+3 at spatial offset `pos` of the output layout as they are,
+// skipping those past the channel count or past the row (ow).
 // Written out: a loop-indexed v[c] would live in memory on llvmpipe.
 fn put_raw(n: u32, co: u32, pos: u32, ow: u32, v: vec4<f32>) {
     if (ow >= p.ow) { return; }
@@ -220,6 +219,7 @@ fn put_raw(n: u32, co: u32, pos: u32, ow: u32, v: vec4<f32>) {
     if (co + 3u < p.co) { fy[o + 3u * p.ycs] = v.w; }
 }
 
+// put_raw plus the bias (the buffer family; the texture tiles start at the bias instead).
 fn put(n: u32, co: u32, pos: u32, ow: u32, v: vec4<f32>) {
     put_raw(n, co, pos, ow, v + bias4(co));
 }

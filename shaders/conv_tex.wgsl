@@ -15,8 +15,9 @@
 // as read-only storage textures, not sampled ones: llvmpipe compiles a sampled textureLoad of
 // a format other than rgba8 into a call to a separate texel-fetch function (every live vector
 // register saved around it; 31% of the samples of conv3d 16->16's three passes on a Zen 3,
-// by `perf` on the JIT code: ci/jit-profile.sh), a storage-texture load inline. Requires subgroups of a multiple of
-// 8 lanes whose ids follow local_invocation_index (src/ops/conv_fast.rs checks).
+// by `perf` on the JIT code: ci/jit-profile.sh), a storage-texture load inline. Requires
+// subgroups of a multiple of 8 lanes whose ids follow local_invocation_index
+// (src/ops/conv_fast.rs checks).
 //
 // Activation texture: texel (w, h, (n * cq + q) * D + d) = channels 4q..4q+3 of voxel
 // (n, d, h, w), cq = cpad / 4. Weight texture: texel (cg * 16 + ci_in * 4 + o4, tap * cq + q)
@@ -47,7 +48,7 @@ fn conv_fast_pack_folded_tex(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c0 = 4u * q;
     var k = vec3<u32>(c0 / (p.kh * p.kw), (c0 / p.kw) % p.kh, c0 % p.kw);
     let v = folded_quad(n, &k, d, i32(h * p.sh) - i32(p.ph), i32(w * p.sw) - i32(p.pw));
-    textureStore(tdst, vec3<u32>(w, h, gid.z * p.od + d), v);
+    textureStore(tdst, tex_pos(n, q, d, h, w), v);
 }
 
 // The plain packing (no fold) when iw is a multiple of 4: each invocation reads one channel
@@ -72,18 +73,19 @@ fn conv_fast_pack_tex_w4(@builtin(global_invocation_id) gid: vec3<u32>) {
     let d = gid.y;
     let cq = p.cpad / 4u;
     let n = gid.z / cq;
-    let c = 4u * (gid.z % cq);
+    let q = gid.z % cq;
+    let c = 4u * q;
     let plane4 = p.od * p.oh * w4n;
     let s4 = (d * p.oh + h) * w4n + w / 4u;
     let r0 = src_quad(n, c, s4, plane4);
     let r1 = src_quad(n, c + 1u, s4, plane4);
     let r2 = src_quad(n, c + 2u, s4, plane4);
     let r3 = src_quad(n, c + 3u, s4, plane4);
-    let z = gid.z * p.od + d;
-    textureStore(tdst, vec3<u32>(w, h, z), vec4<f32>(r0.x, r1.x, r2.x, r3.x));
-    textureStore(tdst, vec3<u32>(w + 1u, h, z), vec4<f32>(r0.y, r1.y, r2.y, r3.y));
-    textureStore(tdst, vec3<u32>(w + 2u, h, z), vec4<f32>(r0.z, r1.z, r2.z, r3.z));
-    textureStore(tdst, vec3<u32>(w + 3u, h, z), vec4<f32>(r0.w, r1.w, r2.w, r3.w));
+    let at = tex_pos(n, q, d, h, w);
+    textureStore(tdst, at, vec4<f32>(r0.x, r1.x, r2.x, r3.x));
+    textureStore(tdst, at + vec3<u32>(1u, 0u, 0u), vec4<f32>(r0.y, r1.y, r2.y, r3.y));
+    textureStore(tdst, at + vec3<u32>(2u, 0u, 0u), vec4<f32>(r0.z, r1.z, r2.z, r3.z));
+    textureStore(tdst, at + vec3<u32>(3u, 0u, 0u), vec4<f32>(r0.w, r1.w, r2.w, r3.w));
 }
 
 // Same parameters as conv_fast_pack_weights; one invocation per texel.

@@ -89,13 +89,12 @@ impl Arg<'_> {
                 view_dimension,
                 multisampled: false,
             },
-            Arg::ReadStorageTexture(_, view_dimension) => wgpu::BindingType::StorageTexture {
-                access: wgpu::StorageTextureAccess::ReadOnly,
-                format: wgpu::TextureFormat::Rgba32Float,
-                view_dimension,
-            },
-            Arg::StorageTexture(_, view_dimension) => wgpu::BindingType::StorageTexture {
-                access: wgpu::StorageTextureAccess::WriteOnly,
+            Arg::StorageTexture(_, view_dimension) | Arg::ReadStorageTexture(_, view_dimension) => wgpu::BindingType::StorageTexture {
+                access: if matches!(self, Arg::ReadStorageTexture(..)) {
+                    wgpu::StorageTextureAccess::ReadOnly
+                } else {
+                    wgpu::StorageTextureAccess::WriteOnly
+                },
                 format: wgpu::TextureFormat::Rgba32Float,
                 view_dimension,
             },

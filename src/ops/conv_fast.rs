@@ -127,13 +127,13 @@ fn volume(s: [usize; 3]) -> usize {
 pub(crate) enum Operands {
     /// Channels-last storage buffers, one register tile per invocation.
     Buffers,
-    /// rgba32f textures, one register tile per subgroup of 8 lanes.
+    /// rgba32f read-only storage textures, one register tile per subgroup of 8 lanes.
     Textures,
 }
 
-/// The operands `ConvKernel::Auto` uses on `gpu`: buffers without subgroups of 8; otherwise
-/// `RENDERNET_CONV_OPERANDS` (`buffers` or `textures`) if set, else textures if they ran a
-/// small conv faster and identically (see `measure`), measured once per machine and cached
+/// The operands `ConvKernel::Auto` uses on `gpu`: buffers without subgroups of 8 or read-only
+/// rgba32f storage textures; otherwise `RENDERNET_CONV_OPERANDS` (`buffers` or `textures`) if
+/// set, else textures if they ran a small conv faster and identically (see `measure`), measured once per machine and cached
 /// (`Gpu::calibrated_choice`): which family wins depends on the driver and on the CPU
 /// lavapipe runs on (texture fetches against per-lane buffer loads).
 pub(crate) fn calibrated(gpu: &Gpu) -> Operands {
