@@ -473,7 +473,7 @@ fn render_picks_the_colour_weights_for_a_coloured_grid() {
     let out = run_ok(&["render", "--shape", "chair", "--seed", "9001", "--colour", "--size", "64", "--out", p]);
     assert!(out.contains("embedded tiny-phong-colour weights") && png.exists(), "{out}");
     let out = run_ok(&["render", "--shape", "chair", "--seed", "9001", "--size", "64", "--out", p]);
-    assert!(out.contains("embedded tiny-phong weights (held-out"), "{out}");
+    assert!(out.contains("embedded base-phong weights (held-out"), "{out}");
     let data = dir.join("data");
     let d = data.to_str().unwrap();
     run_ok(&["dataset", "--colour", "--count", "1", "--views", "1", "--res", "16", "--image", "128", "--seed", "2", "--test-fraction", "1", "--out", d]);
@@ -506,6 +506,35 @@ fn render_picks_the_fastest_shipped_model_that_meets_the_target() {
     assert!(!out.status.success() && err.contains("--target-psnr 40") && err.contains("'base'"), "{err}");
     let out = rendernet().args(["render", "--quality", "fast", "--weights", "w.safetensors", "--out", p]).output().unwrap();
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("--weights"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Without --preset, `render` takes the preset a --weights file records (`train` writes it)
+/// and, with the shipped weights, the most accurate model there is for the shader and grid;
+/// a recorded preset that does not exist is named with where it came from.
+#[test]
+fn render_defaults_to_the_recorded_or_most_accurate_preset() {
+    use rendernet::graph::params::{Named, parse_safetensors, save_safetensors};
+    let dir = scratch("default-preset");
+    let p = dir.join("d.png");
+    let p = p.to_str().unwrap();
+    let out = run_ok(&["render", "--size", "32", "--out", p]);
+    assert!(out.contains("embedded base-phong weights"), "{out}");
+    let out = run_ok(&["render", "--size", "32", "--shader", "ao", "--out", p]);
+    assert!(out.contains("embedded tiny-ao weights"), "{out}");
+    let (params, meta) = parse_safetensors(rendernet::nn::render::NANO_PHONG_WEIGHTS, "nano").unwrap();
+    assert_eq!(meta.get("preset").map(String::as_str), Some("nano"), "the shipped nano weights record their preset");
+    let tensors: Vec<Named> = params.into_iter().map(|(n, (shape, v))| (n, shape, v)).collect();
+    let nano = dir.join("nano.safetensors");
+    save_safetensors(&nano, &tensors, meta.clone()).unwrap();
+    let out = run_ok(&["render", "--size", "32", "--weights", nano.to_str().unwrap(), "--out", p]);
+    assert!(out.contains("nano.safetensors"), "{out}");
+    let odd = dir.join("odd.safetensors");
+    let mut bad = meta;
+    bad.insert("preset".to_string(), "huge".to_string());
+    save_safetensors(&odd, &tensors, bad).unwrap();
+    let e = run_err(&["render", "--size", "32", "--weights", odd.to_str().unwrap(), "--out", p], &[]);
+    assert!(e.contains("odd.safetensors: metadata 'preset'") && e.contains("'huge'") && e.contains("--preset"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -2,6 +2,7 @@
 //! by gradient descent through the frozen network (library: `rendernet::invert`).
 
 use super::truth::{SceneArgs, load};
+use super::weights::{Loaded, MANY_RENDERS};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rendernet::bench::median;
@@ -88,7 +89,7 @@ pub fn run(a: InvertArgs) -> Result<()> {
     if a.texture {
         voxels_format(&a.out_voxels(), true)?;
     }
-    let preset = a.net.preset()?;
+    let Loaded { preset, bytes, name } = a.net.resolve(Shader::Phong, false, MANY_RENDERS)?;
     if a.image.is_none() {
         // The scene flags then describe the true view and light, rendered as the target.
         a.scene.validate(preset.image_for(preset.cam))?;
@@ -98,7 +99,6 @@ pub fn run(a: InvertArgs) -> Result<()> {
     if a.texture {
         return super::texture::invert_texture(&a.texture_search, &a.net, &gpu, &grid, &what, a.image.as_deref(), &a.scene, &a.out, &a.out_voxels(), a.json, t0);
     }
-    let (bytes, name) = a.net.load()?;
     let inv = Inverter::new(preset, &bytes, &name, Light::default());
     let (target, truth) = match &a.image {
         Some(p) => (Image::load_rgb(p)?, None),
@@ -265,8 +265,8 @@ pub(crate) fn dataset_inverter(net: &super::weights::WeightsArgs, ds: &Dataset) 
         return Err(Error::Invalid(format!("{}: inversion needs a Phong dataset", ds.dir().display())));
     };
     let light = Light { ambient: ph.ambient, kd: ph.kd, ks: ph.ks, shininess: ph.shininess, ..Light::default() };
-    let (bytes, name) = net.load()?;
-    Ok((Inverter::new(net.preset()?, &bytes, &name, light), name))
+    let Loaded { preset, bytes, name } = net.resolve(Shader::Phong, false, MANY_RENDERS)?;
+    Ok((Inverter::new(preset, &bytes, &name, light), name))
 }
 
 /// Inverts held-out samples and summarises the errors.

@@ -2,7 +2,8 @@
 
 use super::truth::{SceneArgs, load};
 use clap::Args;
-use rendernet::nn::render::{CROP_MARGIN, Renderer, SHIPPED};
+use super::weights::{Loaded, MANY_RENDERS};
+use rendernet::nn::render::{CROP_MARGIN, Renderer, SHIPPED, most_accurate_shipped};
 use rendernet::metrics::Scores;
 use rendernet::reference::{self, Image, Options, Shader};
 use rendernet::{Gpu, Result};
@@ -48,9 +49,11 @@ pub fn run(a: RenderArgs) -> Result<()> {
     super::output::check_png_out(&a.out)?;
     let (grid, what) = load(&a.scene)?;
     let gpu = Gpu::new()?;
-    let preset = a.net.preset()?;
+    let coloured = grid.colour().is_some();
+    // Render draws one image: the most accurate shipped model is worth its cost here.
+    let default = most_accurate_shipped(a.shader, coloured).unwrap_or(MANY_RENDERS);
+    let Loaded { preset, bytes, name } = a.net.resolve(a.shader, coloured, default)?;
     let net_preset = preset.name;
-    let (bytes, name) = a.net.load_for_grid(a.shader, grid.colour().is_some())?;
     let mut net = Renderer::for_shader(&gpu, preset, a.shader, &bytes, &name, a.size)?.with_crop_margin((!a.no_crop).then_some(a.crop_margin));
     let (view, light) = (a.scene.view(), a.scene.light());
     let t1 = Instant::now();
@@ -65,7 +68,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     } else {
         img.save_png(&a.out)?;
     }
-    let measured = SHIPPED.iter().find(|m| a.net.weights.is_none() && grid.colour().is_none() && a.shader == Shader::Phong && m.preset == net_preset).map(|m| format!(" (held-out object PSNR {:.2} dB)", m.object_psnr));
+    let measured = SHIPPED.iter().find(|m| a.net.weights.is_none() && !coloured && a.shader == Shader::Phong && m.preset == net_preset).map(|m| format!(" (held-out object PSNR {:.2} dB)", m.object_psnr));
     println!("rendered {} with {name}{}", a.scene.describe(&what), measured.unwrap_or_default());
     println!(
         "wrote {} in {:.2} s (network forward {:.2} s, on {})",

@@ -3,12 +3,13 @@
 //! `rendernet::stress`).
 
 use super::truth::{SceneArgs, load};
+use super::weights::{Loaded, MANY_RENDERS};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rendernet::nn::render::Renderer;
 use rendernet::chart::{self, Cap, Options};
 use rendernet::metrics::PSNR_CAP;
-use rendernet::reference;
+use rendernet::reference::{self, Shader};
 use rendernet::stress::{self, Row};
 use rendernet::{Error, Gpu, Result, VoxelGrid};
 use std::path::{Path, PathBuf};
@@ -71,12 +72,11 @@ pub fn run(a: StressArgs) -> Result<()> {
     if !charts.is_dir() {
         return Err(Error::Invalid(format!("--charts {}: not a folder that exists", charts.display())));
     }
-    let preset = a.net.preset()?;
+    let Loaded { preset, bytes, name } = a.net.resolve(Shader::Phong, false, MANY_RENDERS)?;
     let size = preset.image_for(preset.cam);
     a.scene.validate(size)?;
     let (grid, what) = load(&a.scene)?;
     let gpu = Gpu::new()?;
-    let (bytes, name) = a.net.load()?;
     let mut net = Renderer::new(&gpu, preset, &bytes, &name, size)?;
     let bar = ProgressBar::new(0);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} scenes [{elapsed_precise}]").expect("static template"));

@@ -2,6 +2,7 @@
 //! procedural shapes, camera and light known, scored from a view no input image had
 //! (library: `rendernet::invert::evaluate_textures`).
 
+use super::weights::{Loaded, MANY_RENDERS};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rendernet::invert::{Inverter, TextureOptions, evaluate_textures};
@@ -52,13 +53,13 @@ pub fn load_texture(path: Option<&Path>) -> Result<(Vec<u8>, String)> {
 
 /// The coloured RenderNet of `net` (its shipped colour weights without --weights).
 pub fn colour_inverter(net: &super::weights::WeightsArgs) -> Result<(Inverter, String)> {
-    let (bytes, name) = net.load_for_grid(Shader::Phong, true)?;
+    let Loaded { preset, bytes, name } = net.resolve(Shader::Phong, true, MANY_RENDERS)?;
     if !rendernet::nn::render::weights_take_colour(&bytes, &name)? {
         return Err(Error::Invalid(format!(
             "{name} take grey grids; texture recovery needs a network trained on coloured voxels (shipped for --preset tiny; or --weights from `rendernet train` on a `dataset --colour` set)"
         )));
     }
-    Ok((Inverter::new(net.preset()?.with_colour(), &bytes, &name, Light::default()), name))
+    Ok((Inverter::new(preset.with_colour(), &bytes, &name, Light::default()), name))
 }
 
 /// Flags of `rendernet eval-texture`.

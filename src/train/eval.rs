@@ -91,8 +91,17 @@ pub fn evaluate_bytes(gpu: &Gpu, p: &Preset, head: Head, weights: &[u8], name: &
     // The image side (twice the camera grid's for the tiny preset), from the network itself.
     let side = net.graph.info(net.image).shape[3];
     score(ds, limit, |s| {
+        let truth = s.images.get(target).ok_or_else(|| crate::error::Error::Invalid(format!("{}: held-out sample lacks the '{target}' image", ds.dir().display())))?;
+        if truth.size < side {
+            return Err(crate::error::Error::Invalid(format!(
+                "{}: images are {}px but preset '{}' renders {side}px (larger images are scored upscaled, as `render` draws them; smaller ones are not)",
+                ds.dir().display(),
+                truth.size,
+                p.name
+            )));
+        }
         let mut b = Batch::default();
-        b.push(p, s, [0, 0, p.cam, p.cam], &[target.to_string()])?;
+        b.push(p, s, [0, 0, p.cam, p.cam], &[])?;
         ex.feed(gpu, net.grid, &b.grid)?;
         ex.feed(gpu, net.pose, &b.pose)?;
         if let Some(l) = net.light {
@@ -100,10 +109,10 @@ pub fn evaluate_bytes(gpu: &Gpu, p: &Preset, head: Head, weights: &[u8], name: &
         }
         ex.forward(gpu)?;
         let y = ex.read(gpu, net.image)?;
-        let t = &b.targets[0].1;
-        // Both sides clamped to [0, 1], as images are stored (the metrics clamp too).
-        let image = |data: Vec<f32>| Image { channels: t.len() / (side * side), size: side, data };
-        Ok((image(y.iter().map(|v| v.clamp(0.0, 1.0)).collect()), image(t.clone())))
+        // Clamped to [0, 1], as images are stored (the metrics clamp too); larger targets are
+        // met as `Renderer` meets a larger size: drawn at the trained side, then upscaled.
+        let drawn = Image { channels: truth.channels, size: side, data: y.iter().map(|v| v.clamp(0.0, 1.0)).collect() };
+        Ok((if truth.size == side { drawn } else { drawn.resized(truth.size) }, truth.clone()))
     })
 }
 
