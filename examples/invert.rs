@@ -37,7 +37,7 @@ fn run(a: Args) -> Result<(), Box<dyn std::error::Error>> {
     let (view, light) = (View { azimuth: 40.0, elevation: 70.0, radius: 3.3 }, Light { azimuth: 30.0, elevation: 60.0, ..Light::default() });
     let rm = RayMarcher::new(&gpu);
     let target = rm.render(&gpu, &truth, &view, &light, Shader::Phong, 128)?;
-    let inv = Inverter::new(Preset::tiny(), TINY_PHONG_WEIGHTS, "embedded", Light::default());
+    let inv = Inverter::new(Preset::tiny(), TINY_PHONG_WEIGHTS, "embedded", Light::default())?;
     let t = std::time::Instant::now();
     let est = inv.invert_unknown_shape(&gpu, &PriorPreset::small(), PRIOR_CHAIRS_WEIGHTS, &target, &InvertOptions::default(), &ShapeOptions::default(), 2, |r, n| {
         println!("round {r}/{n} done ({:.0} s)", t.elapsed().as_secs_f64())

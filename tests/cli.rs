@@ -204,6 +204,25 @@ fn eval_scores_the_reference_renderer_on_the_input_grid() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `eval` on images larger than the network draws scores them as `render` draws them (at the
+/// trained side, upscaled: a score, not an error); smaller images are refused by size.
+#[test]
+fn eval_scores_larger_images_upscaled_and_refuses_smaller_ones() {
+    let dir = scratch("eval-sizes");
+    let score = |image: &str| {
+        let data = dir.join(format!("data-{image}"));
+        let d = data.to_str().unwrap().to_string();
+        run_ok(&["dataset", "--count", "1", "--views", "1", "--res", "16", "--image", image, "--seed", "3", "--test-fraction", "1", "--out", &d]);
+        d
+    };
+    let out = run_ok(&["eval", "--data", &score("256"), "--preset", "nano", "--json"]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("not JSON ({e}): {out}"));
+    assert!(v["samples"].as_u64() == Some(1) && v["object_psnr_mean"].as_f64().unwrap() > v["black_image_object_psnr"].as_f64().unwrap(), "{v}");
+    let e = run_err(&["eval", "--data", &score("64"), "--preset", "nano"], &[]);
+    assert!(e.contains("images are 64px") && e.contains("renders 128px"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Runs `rendernet args` with `env` set, asserts it fails without a panic, returns stderr.
 fn run_err(args: &[&str], env: &[(&str, &str)]) -> String {
     let out = rendernet().args(args).envs(env.iter().copied()).output().unwrap();

@@ -22,7 +22,7 @@ fn pose_and_light_gradients_match_finite_differences() {
     let grid = voxel::safetensors_io::from_bytes(&bunny, "bunny64").unwrap();
     let (view, light) = (View { azimuth: 40.0, elevation: 75.0, radius: 3.6 }, Light { azimuth: 20.0, elevation: 70.0, ..Light::default() });
     let target = reference::RayMarcher::new(&gpu).render(&gpu, &grid, &view, &light, Shader::Phong, 128).unwrap();
-    let inv = Inverter::new(Preset::tiny(), TINY_PHONG_WEIGHTS, "embedded", Light::default());
+    let inv = Inverter::new(Preset::tiny(), TINY_PHONG_WEIGHTS, "embedded", Light::default()).unwrap();
     // A start off the truth in every unknown, so every gradient component is far from zero.
     let base = [52.0, 95.0, 3.9f64.ln(), 45.0, 90.0];
     let h = [0.4, 0.4, 0.004, 0.4, 0.4];
@@ -234,7 +234,7 @@ fn shape_search_lowers_the_image_loss() {
     let grid = voxel::safetensors_io::from_bytes(&bunny, "bunny64").unwrap();
     let (view, light) = (View::default(), Light::default());
     let target = reference::RayMarcher::new(&gpu).render(&gpu, &grid, &view, &light, Shader::Phong, 128).unwrap();
-    let inv = Inverter::new(Preset::tiny(), TINY_PHONG_WEIGHTS, "embedded", Light::default());
+    let inv = Inverter::new(Preset::tiny(), TINY_PHONG_WEIGHTS, "embedded", Light::default()).unwrap();
     let o = ShapeOptions { steps: 6, lr: 0.05, ..ShapeOptions::default() };
     let one = [ShapeView { image: &target, view, light }];
     let est = inv.recover_shape(&gpu, &pp, &prior_bytes, &one, &o).unwrap();
@@ -299,7 +299,7 @@ fn multi_start_finds_the_training_code_that_rendered_the_images() {
     let (shots, images) = two_shots(&gpu, &mut ex, &net, p.input, &p, head_light);
     let truth_grid = grid_from_input_values(&ex.read(&gpu, net.grid).unwrap(), pp.res).unwrap();
     let views: Vec<ShapeView> = images.iter().zip(&shots).map(|(image, (view, light))| ShapeView { image, view: *view, light: *light }).collect();
-    let inv = Inverter::new(p, TINY_PHONG_WEIGHTS, "embedded", head_light);
+    let inv = Inverter::new(p, TINY_PHONG_WEIGHTS, "embedded", head_light).unwrap();
     let o = ShapeOptions { steps: 2, candidates: 11, keep: 1, ..ShapeOptions::default() };
     let est = inv.recover_shape(&gpu, &pp, &bytes, &views, &o).unwrap();
     // The silhouette term of the true code is small (the network's mask against the
@@ -346,7 +346,7 @@ fn texture_search_finds_the_paint_that_rendered_the_images() {
     ex.feed(&gpu, occupancy, &input_values(&shape.resample_to(tp.res).unwrap())).unwrap();
     let (shots, images) = two_shots(&gpu, &mut ex, &net, tp.res, &rp, head_light);
     let views: Vec<ShapeView> = images.iter().zip(&shots).map(|(image, (view, light))| ShapeView { image, view: *view, light: *light }).collect();
-    let inv = Inverter::new(rp, TINY_PHONG_COLOUR_WEIGHTS, "colour", head_light);
+    let inv = Inverter::new(rp, TINY_PHONG_COLOUR_WEIGHTS, "colour", head_light).unwrap();
     let o = TextureOptions { steps: 3, candidates: 8, keep: 1, ..TextureOptions::default() };
     let est = inv.recover_texture(&gpu, &tp, TEXTURE_SMALL_WEIGHTS, &shape, &views, &o).unwrap();
     let (got, want) = (est.start_paint.code(), starts[5].code());
@@ -362,7 +362,7 @@ fn texture_search_finds_the_paint_that_rendered_the_images() {
         inv.recover_texture(&gpu, &tp, TEXTURE_SMALL_WEIGHTS, &shape, &views, &o1).unwrap().curve[0]
     };
     assert!(others > 10.0 * est.curve[0].max(1e-5), "another paint scores {others}, the true one {}: the test cannot tell them apart", est.curve[0]);
-    let grey = Inverter::new(Preset::tiny(), TINY_PHONG_WEIGHTS, "grey", head_light);
+    let grey = Inverter::new(Preset::tiny(), TINY_PHONG_WEIGHTS, "grey", head_light).unwrap();
     let err = grey.recover_texture(&gpu, &tp, TEXTURE_SMALL_WEIGHTS, &shape, &views, &o).unwrap_err().to_string();
     assert!(err.contains("coloured"), "{err}");
 }

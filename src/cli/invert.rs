@@ -99,7 +99,7 @@ pub fn run(a: InvertArgs) -> Result<()> {
     if a.texture {
         return super::texture::invert_texture(&a.texture_search, &a.net, &gpu, &grid, &what, a.image.as_deref(), &a.scene, &a.out, &a.out_voxels(), a.json, t0);
     }
-    let inv = Inverter::new(preset, &bytes, &name, Light::default());
+    let inv = Inverter::new(preset, &bytes, &name, Light::default())?;
     let (target, truth) = match &a.image {
         Some(p) => (Image::load_rgb(p)?, None),
         None => {
@@ -266,7 +266,7 @@ pub(crate) fn dataset_inverter(net: &super::weights::WeightsArgs, ds: &Dataset) 
     };
     let light = Light { ambient: ph.ambient, kd: ph.kd, ks: ph.ks, shininess: ph.shininess, ..Light::default() };
     let Loaded { preset, bytes, name } = net.resolve(Shader::Phong, false, MANY_RENDERS)?;
-    Ok((Inverter::new(preset, &bytes, &name, light), name))
+    Ok((Inverter::new(preset, &bytes, &name, light)?, name))
 }
 
 /// Inverts held-out samples and summarises the errors.

@@ -22,7 +22,9 @@ pub struct RenderArgs {
     /// contour or ao. --compare renders the same shader with the reference.
     #[arg(long, default_value = "phong", value_parser = super::truth::parse_shader)]
     shader: Shader,
-    /// Image side in pixels (a multiple of 8 for the tiny preset).
+    /// Image side in pixels (a multiple of 8 for the tiny preset). Above the side the network
+    /// was trained at (128 for the shipped weights) it draws at that side and the image is
+    /// upscaled: drawn at a denser camera grid than it learned, its picture falls apart.
     #[arg(long, default_value_t = 128, allow_negative_numbers = true)]
     size: usize,
     /// Also render the reference renderer's image, write it beside the network's, and print

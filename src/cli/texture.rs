@@ -59,7 +59,7 @@ pub fn colour_inverter(net: &super::weights::WeightsArgs) -> Result<(Inverter, S
             "{name} take grey grids; texture recovery needs a network trained on coloured voxels (shipped for --preset tiny; or --weights from `rendernet train` on a `dataset --colour` set)"
         )));
     }
-    Ok((Inverter::new(preset.with_colour(), &bytes, &name, Light::default()), name))
+    Ok((Inverter::new(preset.with_colour(), &bytes, &name, Light::default())?, name))
 }
 
 /// Flags of `rendernet eval-texture`.

@@ -52,7 +52,7 @@ pub struct Loaded {
 pub enum Quality {
     /// The fastest shipped model.
     Fast,
-    /// The default: the middle of the ladder.
+    /// The middle of the ladder (tiny; the default of invert and stress).
     Balanced,
     /// The most accurate shipped model.
     Best,

@@ -105,9 +105,21 @@ pub struct Inverter {
 impl Inverter {
     /// `weights`: Phong RenderNet parameters of `preset` (safetensors bytes, `name` labels
     /// them in errors); `light` gives the material constants the network was trained with.
-    pub fn new(preset: Preset, weights: &[u8], name: &str, light: Light) -> Inverter {
+    /// Grids are read at the side the weights record ([`Preset::for_weights`]), as
+    /// [`crate::nn::render::Renderer`] reads them; malformed bytes are an error.
+    pub fn new(preset: Preset, weights: &[u8], name: &str, light: Light) -> Result<Inverter> {
+        Ok(Inverter::exactly(preset.for_weights(weights, name)?, weights, name, light))
+    }
+
+    /// The inverter for `preset` as given (its input side kept).
+    fn exactly(preset: Preset, weights: &[u8], name: &str, light: Light) -> Inverter {
         let size = preset.image_for(preset.cam);
         Inverter { preset, head_light: light, weights: weights.to_vec(), name: name.to_string(), size }
+    }
+
+    /// The same network reading grids at `res`^3: what a decoder in front of it produces.
+    fn reading(&self, res: usize) -> Inverter {
+        Inverter::exactly(Preset { input: res, ..self.preset.clone() }, &self.weights, &self.name, self.head_light)
     }
 
     /// Image side the network renders (the input image must have it).

@@ -112,7 +112,8 @@ impl Inverter {
         };
         let penalty = |z: &[f32]| prior_term(z, stats.as_ref(), o.prior_weight);
         let d = Descent { steps: o.steps, lr: o.lr, keep: o.keep, silhouette: o.silhouette, penalty: &penalty };
-        let f = code::search(self, gpu, &Front::Shape { preset: prior, weights: prior_weights }, views, starts, &d)?;
+        // The decoder's grid is the network's input: read at the prior's side.
+        let f = code::search(&self.reading(prior.res), gpu, &Front::Shape { preset: prior, weights: prior_weights }, views, starts, &d)?;
         // Both grids in one decoder-only batch (the renderer is not needed to decode).
         let mut grids = decode_codes(gpu, prior, prior_weights, &[f.code.as_slice(), &f.start].concat())?;
         let start_grid = grids.pop().expect("two codes decoded");

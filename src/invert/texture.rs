@@ -76,7 +76,7 @@ impl Inverter {
         if !self.preset.colour {
             return Err(Error::Invalid(format!("{}: texture recovery needs coloured RenderNet weights (a grey network renders no texture)", self.name)));
         }
-        let inv = Inverter::new(crate::nn::rendernet::Preset { input: tp.res, ..self.preset.clone() }, &self.weights, &self.name, self.head_light);
+        let inv = self.reading(tp.res);
         let cube = shape.resample_to(tp.res).map_err(|e| Error::Invalid(format!("shape: {e}")))?;
         let occupancy = camera::input_values(&cube);
         let starts: Vec<Vec<f32>> = match o.start {
