@@ -284,6 +284,7 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
     bar.finish_and_clear();
     let pose: Vec<f64> = errs.iter().map(|e| e.pose_degrees).collect();
     let light: Vec<f64> = errs.iter().map(|e| e.light_degrees).collect();
+    let optimum: Vec<f64> = errs.iter().map(|e| e.light_optimum_degrees).collect();
     let radius: Vec<f64> = errs.iter().map(|e| (e.radius_ratio - 1.0).abs()).collect();
     let within = |xs: &[f64], t: f64| xs.iter().filter(|&&x| x <= t).count() as f64 / xs.len().max(1) as f64;
     let secs = Interval::of(&errs.iter().map(|e| e.seconds).collect::<Vec<_>>());
@@ -294,11 +295,12 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
             "pose_error_mean_degrees": Interval::of(&pose).mean, "pose_error_ci95_degrees": Interval::of(&pose).ci95,
             "pose_within_5_degrees": within(&pose, 5.0), "pose_within_10_degrees": within(&pose, 10.0),
             "light_error_median_degrees": median(&light), "light_within_10_degrees": within(&light, 10.0),
+            "light_optimum_error_median_degrees": median(&optimum), "light_optimum_within_10_degrees": within(&optimum, 10.0),
             "radius_relative_error_median": median(&radius),
             "seconds_per_image": secs.mean,
             "per_sample": errs.iter().map(|e| serde_json::json!({
                 "shape": e.shape_id, "pose_degrees": e.pose_degrees, "light_degrees": e.light_degrees,
-                "radius_ratio": e.radius_ratio, "mse": e.mse, "seconds": e.seconds})).collect::<Vec<_>>(),
+                "light_optimum_degrees": e.light_optimum_degrees, "radius_ratio": e.radius_ratio, "mse": e.mse, "seconds": e.seconds})).collect::<Vec<_>>(),
         });
         println!("{}", serde_json::to_string_pretty(&j).map_err(|e| Error::Invalid(e.to_string()))?);
         return Ok(());
@@ -310,6 +312,11 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
         median(&pose), iv.mean, iv.ci95, 100.0 * within(&pose, 5.0), 100.0 * within(&pose, 10.0)
     );
     println!("light direction error: median {:.1} deg, within 10 deg {:.0}%", median(&light), 100.0 * within(&light, 10.0));
+    println!(
+        "the network's own best light at the true camera (5-degree grid): median {:.1} deg from the truth, within 10 deg {:.0}%",
+        median(&optimum),
+        100.0 * within(&optimum, 10.0)
+    );
     println!("radius relative error: median {:.3}", median(&radius));
     println!("{:.1} s per image (mean)", secs.mean);
     Ok(())

@@ -12,6 +12,7 @@
 //! op. The start with the lowest final MSE wins.
 
 mod code;
+mod light;
 mod shape;
 mod texture;
 mod starts;
@@ -27,7 +28,7 @@ use crate::nn::rendernet::{Head, Preset, RenderNet, phong_of};
 use crate::ops::loss::Loss;
 use crate::reference::{Image, Light, View};
 use crate::voxel::VoxelGrid;
-use starts::{LIGHT_STARTS, POLISHED, distinct_lights, light_grid, with_twins};
+use starts::{POLISH_STEP_DEGREES, POLISHED, distinct_lights, light_grid, light_starts, with_twins};
 
 /// Search settings.
 #[derive(Clone, Debug)]
@@ -145,8 +146,9 @@ impl Inverter {
         ex.training = false;
         ex.freeze_params();
         ex.keep(net.image);
-        if let Some([_, _, mask]) = net.maps {
-            ex.keep(mask);
+        // The maps: the silhouette scores read the mask, the light ranking all three.
+        for m in net.maps.into_iter().flatten() {
+            ex.keep(m);
         }
         if loss {
             ex.want_grad(net.pose);
@@ -193,28 +195,39 @@ impl Inverter {
             .collect())
     }
 
-    /// `start` with each light of `lights` (e.g. [`LIGHT_STARTS`]), ranked by how well its
-    /// render matches `target` (the window's pixels): summed squared error, lowest first.
-    /// The refinement follows the image gradient, which from a light on the wrong side can
-    /// pull the pose astray before the light gets there.
+    /// Each of `starts` with each light of `lights` (azimuth, elevation), ranked by how well
+    /// its render matches `target` (the window's pixels): summed squared error, lowest first,
+    /// one list per start. The starts' maps come from one forward pass per `sil` batch; the
+    /// lights are scored on the CPU ([`light::Maps`]). The refinement follows the image
+    /// gradient, which from a light on the wrong side can pull the pose astray before the
+    /// light gets there.
     #[allow(clippy::too_many_arguments)]
-    fn ranked_lights(&self, gpu: &Gpu, sil: &mut (RenderNet, Executor), grid: &[f32], target: &[f32], start: Vars, win: &Window, lights: &[(f64, f64)]) -> Result<Vec<(f64, Vars)>> {
-        let cands: Vec<Vars> = lights.iter().map(|&(az, el)| Vars([start.0[0], start.0[1], start.0[2], az, el])).collect();
+    fn ranked_lights(&self, gpu: &Gpu, sil: &mut (RenderNet, Executor), grid: &[f32], target: &[f32], starts: &[Vars], win: &Window, lights: &[(f64, f64)]) -> Result<Vec<Vec<(f64, Vars)>>> {
         let (net, ex) = sil;
         let batch = net.graph.info(net.pose).shape[0];
-        let mut ranked = Vec::with_capacity(cands.len());
-        for chunk in cands.chunks(batch) {
+        let [nm, am, mm] = net.maps.expect("Phong head");
+        let ph = phong_of(&self.head_light);
+        let values: Vec<[f32; 6]> = lights.iter().map(|&(az, el)| camera::light_values(&Light { azimuth: az, elevation: el, ..self.head_light })).collect();
+        let mut out = Vec::with_capacity(starts.len());
+        for chunk in starts.chunks(batch) {
             let mut padded = chunk.to_vec();
             padded.resize(batch, *chunk.last().expect("chunks are not empty"));
             self.feed(gpu, net, ex, grid, &padded, win)?;
             ex.forward(gpu)?;
-            let img = ex.read(gpu, net.image)?;
-            for (y, v) in img.chunks(target.len()).zip(chunk) {
-                ranked.push((y.iter().zip(target).map(|(a, b)| ((a.clamp(0.0, 1.0) - b) as f64).powi(2)).sum::<f64>(), *v));
+            let (normal, albedo, mask) = (ex.read(gpu, nm)?, ex.read(gpu, am)?, ex.read(gpu, mm)?);
+            let hw = target.len() / 3;
+            for (b, start) in chunk.iter().enumerate() {
+                let maps = light::Maps::of(&normal, &albedo, &mask, hw, b);
+                let mut ranked: Vec<(f64, Vars)> = lights
+                    .iter()
+                    .zip(&values)
+                    .map(|(&(az, el), l)| (maps.sse(&ph, l, target), Vars([start.0[0], start.0[1], start.0[2], az, el])))
+                    .collect();
+                ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
+                out.push(ranked);
             }
         }
-        ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
-        Ok(ranked)
+        Ok(out)
     }
 
     /// Checks `target`'s size and returns its foreground mask (full image).
@@ -275,10 +288,8 @@ impl Inverter {
         // silhouette cut to the best 16 or 12 views lost the true side of 1 of 8 held-out
         // chairs; the refinement starts from the views the image itself favours.
         let target_crop = win.crop_rgb(target);
-        let mut pool = Vec::new();
-        for v in with_twins(rescored.iter().map(|s| s.1), usize::MAX) {
-            pool.push(self.ranked_lights(gpu, &mut sil, &gv, &target_crop, v, &win, &LIGHT_STARTS)?[0]);
-        }
+        let views = with_twins(rescored.iter().map(|s| s.1), usize::MAX);
+        let mut pool: Vec<(f64, Vars)> = self.ranked_lights(gpu, &mut sil, &gv, &target_crop, &views, &win, &light_starts())?.into_iter().map(|r| r[0]).collect();
         pool.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut vars: Vec<Vars> = pool.into_iter().take(o.keep).map(|p| p.1).collect();
         let (mut best, mut curve) = self.refine(gpu, &gv, &target_crop, &mut vars, o, &mut progress, &win)?;
@@ -289,7 +300,7 @@ impl Inverter {
         // camera and light refined once more from the best POLISHED lights of that grid at
         // least 30 degrees apart (the network's light optimum is shallow: several far-apart
         // lights score alike); the lower MSE wins.
-        let grid_lights = self.ranked_lights(gpu, &mut sil, &gv, &target_crop, best, &win, &light_grid())?;
+        let grid_lights = self.ranked_lights(gpu, &mut sil, &gv, &target_crop, &[best], &win, &light_grid(POLISH_STEP_DEGREES))?.remove(0);
         let mut relit = distinct_lights(grid_lights.into_iter().map(|r| r.1), POLISHED);
         let polish = InvertOptions { steps: o.steps / 2, ..o.clone() };
         let (again, tail) = self.refine(gpu, &gv, &target_crop, &mut relit, &polish, &mut |_, _| {}, &win)?;
@@ -306,6 +317,21 @@ impl Inverter {
         let img: Vec<f32> = ex.read(gpu, net.image)?.into_iter().map(|x| x.clamp(0.0, 1.0)).collect();
         let mse = img.iter().zip(&target.data).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / img.len() as f64;
         Ok(Estimate { view: best.view(), light: best.light(&self.head_light), mse, curve, image: Image { channels: 3, size: self.size, data: img } })
+    }
+
+    /// The light, among every direction of a 5-degree grid, under which the network's render
+    /// of `grid` seen from `view` best matches `target` (image MSE over the window around its
+    /// foreground): the best any light search through this network can do at that camera.
+    /// At the true camera, its distance from the true light is the network's share of a light
+    /// error; the rest is the search's.
+    pub fn light_optimum(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, view: &View) -> Result<Light> {
+        let win = Window::around(&self.preset, &self.foreground(target)?, self.size);
+        let gv = self.grid_values(grid)?;
+        let (net, ex, _) = self.executor(gpu, 1, false, &win)?;
+        let d = Light::default();
+        let start = Vars([view.azimuth, view.elevation, view.radius.ln(), d.azimuth, d.elevation]);
+        let ranked = self.ranked_lights(gpu, &mut (net, ex), &gv, &win.crop_rgb(target), &[start], &win, &light_grid(POLISH_STEP_DEGREES))?;
+        Ok(ranked[0][0].1.light(&self.head_light))
     }
 
     /// The image MSE (unclamped, as the loss op computes it, over the window around the
@@ -539,6 +565,9 @@ pub struct InvertError {
     pub pose_degrees: f64,
     /// Angle between the true and recovered light directions, degrees.
     pub light_degrees: f64,
+    /// Angle between the true light and the network's own best light at the true camera
+    /// ([`Inverter::light_optimum`]), degrees: what no light search could improve on.
+    pub light_optimum_degrees: f64,
     /// Recovered radius over the true one.
     pub radius_ratio: f64,
     /// Image MSE of the re-render against the input.
@@ -574,6 +603,7 @@ pub fn evaluate(
             shape_id: s.shape_id,
             pose_degrees: angle_between(view_direction(&s.view), view_direction(&est.view)),
             light_degrees: angle_between(light_direction(&s.light), light_direction(&est.light)),
+            light_optimum_degrees: angle_between(light_direction(&s.light), light_direction(&inv.light_optimum(gpu, &s.grid, target, &s.view)?)),
             radius_ratio: est.view.radius / s.view.radius,
             mse: est.mse,
             seconds: t.elapsed().as_secs_f64(),
@@ -582,3 +612,86 @@ pub fn evaluate(
     }
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The CPU shading the light searches rank lights with draws what the network's Phong op
+    /// draws from the same maps (two starts of one batch, specular on, one light from
+    /// behind), and its squared error is the one the image itself gives; f32 on both sides,
+    /// so 1e-4 of a grey level's 1/255 scale leaves room for rounding only.
+    #[test]
+    fn lights_scored_on_the_cpu_match_the_network_image() {
+        let gpu = Gpu::new().unwrap();
+        let head = Light { ks: 0.4, shininess: 12.0, ..Light::default() };
+        let inv = Inverter::new(Preset::nano(), crate::nn::render::NANO_PHONG_WEIGHTS, "nano", head).unwrap();
+        let gv = inv.grid_values(&crate::voxel::bunny()).unwrap();
+        let win = Window::full(&inv.preset, inv.size);
+        let (net, mut ex, _) = inv.executor(&gpu, 2, false, &win).unwrap();
+        let vars = [Vars([30.0, 70.0, 3.3f64.ln(), 30.0, 60.0]), Vars([200.0, 100.0, 4.0f64.ln(), 160.0, 120.0])];
+        inv.feed(&gpu, &net, &ex, &gv, &vars, &win).unwrap();
+        ex.forward(&gpu).unwrap();
+        let [nm, am, mm] = net.maps.unwrap();
+        let (img, normal, albedo, mask) = (ex.read(&gpu, net.image).unwrap(), ex.read(&gpu, nm).unwrap(), ex.read(&gpu, am).unwrap(), ex.read(&gpu, mm).unwrap());
+        let hw = mask.len() / 2;
+        let ph = phong_of(&head);
+        let target: Vec<f32> = img[..3 * hw].iter().map(|v| v.clamp(0.0, 1.0) * 0.9).collect();
+        for (b, v) in vars.iter().enumerate() {
+            let maps = light::Maps::of(&normal, &albedo, &mask, hw, b);
+            let l = camera::light_values(&v.light(&head));
+            let drawn = &img[b * 3 * hw..(b + 1) * 3 * hw];
+            let worst = maps.shade(&ph, &l).iter().zip(drawn).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+            assert!(worst < 1e-4, "start {b}: CPU shading differs from the network image by {worst}");
+            assert!(drawn.iter().any(|&x| x > 0.3), "start {b}: nothing lit to compare");
+            let sse: f64 = drawn.iter().zip(&target).map(|(a, t)| ((a.clamp(0.0, 1.0) - t) as f64).powi(2)).sum();
+            assert!((maps.sse(&ph, &l, &target) - sse).abs() < 1e-3 * sse.max(1e-3), "start {b}: squared error {} against {sse}", maps.sse(&ph, &l, &target));
+        }
+    }
+
+    /// Ranking the 20-degree grid's lights at the camera that drew the target puts the grid
+    /// light that drew it first (error ~0, the network's own image), every list best first.
+    #[test]
+    fn light_ranking_puts_the_light_that_drew_the_image_first() {
+        let gpu = Gpu::new().unwrap();
+        let inv = Inverter::new(Preset::nano(), crate::nn::render::NANO_PHONG_WEIGHTS, "nano", Light::default()).unwrap();
+        let gv = inv.grid_values(&crate::voxel::bunny()).unwrap();
+        let win = Window::full(&inv.preset, inv.size);
+        let (net, ex, _) = inv.executor(&gpu, 3, false, &win).unwrap();
+        let mut sil = (net, ex);
+        let truth = Vars([30.0, 70.0, 3.3f64.ln(), 140.0, 70.0]);
+        inv.feed(&gpu, &sil.0, &sil.1, &gv, &[truth; 3], &win).unwrap();
+        sil.1.forward(&gpu).unwrap();
+        let img = sil.1.read(&gpu, sil.0.image).unwrap();
+        let target: Vec<f32> = img[..img.len() / 3].iter().map(|v| v.clamp(0.0, 1.0)).collect();
+        let other = Vars([210.0, 110.0, 5.0f64.ln(), 0.0, 90.0]);
+        let ranked = inv.ranked_lights(&gpu, &mut sil, &gv, &target, &[other, truth], &win, &light_grid(20.0)).unwrap();
+        assert_eq!(ranked.len(), 2);
+        for r in &ranked {
+            assert_eq!(r.len(), 162);
+            assert!(r.windows(2).all(|w| w[0].0 <= w[1].0), "not best first");
+        }
+        let best = ranked[1][0];
+        assert!(best.0 < 1e-6 && (best.1.0[3], best.1.0[4]) == (140.0, 70.0), "best light {:?} with error {}", best.1, best.0);
+        assert!(ranked[0][0].0 > 1.0, "another camera explains the image as well: {}", ranked[0][0].0);
+    }
+
+    /// The network's own best light at the camera that drew its own image is the light that
+    /// drew it, when that light lies on the 5-degree grid.
+    #[test]
+    fn light_optimum_of_the_network_image_is_the_light_that_drew_it() {
+        let gpu = Gpu::new().unwrap();
+        let inv = Inverter::new(Preset::nano(), crate::nn::render::NANO_PHONG_WEIGHTS, "nano", Light::default()).unwrap();
+        let grid = crate::voxel::bunny();
+        let full = Window::full(&inv.preset, inv.size);
+        let (net, mut ex, _) = inv.executor(&gpu, 1, false, &full).unwrap();
+        let truth = Vars([75.0, 60.0, 3.5f64.ln(), 215.0, 122.5]);
+        inv.feed(&gpu, &net, &ex, &inv.grid_values(&grid).unwrap(), &[truth], &full).unwrap();
+        ex.forward(&gpu).unwrap();
+        let data = ex.read(&gpu, net.image).unwrap().into_iter().map(|v| v.clamp(0.0, 1.0)).collect();
+        let target = Image { channels: 3, size: inv.size, data };
+        let l = inv.light_optimum(&gpu, &grid, &target, &truth.view()).unwrap();
+        assert_eq!((l.azimuth, l.elevation), (215.0, 122.5));
+    }
+}
+

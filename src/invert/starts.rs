@@ -3,18 +3,22 @@
 
 use super::{Vars, polar_unit};
 
-/// Light directions tried at every kept start, `(azimuth, elevation)` relative to the camera
-/// (degrees): the training lights' range (azimuth any, elevation 20..160) in 12 directions.
-pub(super) const LIGHT_STARTS: [(f64, f64); 12] = [
-    (0.0, 45.0), (90.0, 45.0), (180.0, 45.0), (270.0, 45.0),
-    (0.0, 90.0), (90.0, 90.0), (180.0, 90.0), (270.0, 90.0),
-    (0.0, 135.0), (90.0, 135.0), (180.0, 135.0), (270.0, 135.0),
-];
+/// Light directions ranked at every distinct view before the refinement, `(azimuth,
+/// elevation)` relative to the camera (degrees): the 20-degree grid of all directions (162).
+/// Scored on the CPU from each view's maps, so a fine grid costs no more network work than
+/// the 12 directions rendered one by one before.
+pub(super) fn light_starts() -> Vec<(f64, f64)> {
+    light_grid(20.0)
+}
 
-/// Light directions of the polish after the refinement: azimuth every 20 degrees, elevation
-/// 10..170 every 20 (162 directions, in the same frame as [`LIGHT_STARTS`]).
-pub(super) fn light_grid() -> Vec<(f64, f64)> {
-    (0..9).flat_map(|e| (0..18).map(move |a| (20.0 * a as f64, 10.0 + 20.0 * e as f64))).collect()
+/// Grid step of the light polish after the refinement (degrees; 2592 directions).
+pub(super) const POLISH_STEP_DEGREES: f64 = 5.0;
+
+/// Light directions every `step` degrees: azimuth from 0, elevation from `step / 2` to
+/// `180 - step / 2` (in the frame of [`light_starts`]; 20 gives 18 x 9 = 162 directions).
+pub(super) fn light_grid(step: f64) -> Vec<(f64, f64)> {
+    let (na, ne) = ((360.0 / step).round() as usize, (180.0 / step).round() as usize);
+    (0..ne).flat_map(|e| (0..na).map(move |a| (step * a as f64, step / 2.0 + step * e as f64))).collect()
 }
 
 /// The first `n` of `ranked` (best first) whose lights are at least 30 degrees from every
@@ -96,7 +100,7 @@ mod tests {
     /// (20-degree steps: at most ~14 degrees at the equator's cell centres).
     #[test]
     fn light_grid_covers_every_direction() {
-        let grid: Vec<[f64; 3]> = light_grid().iter().map(|&(az, el)| polar_unit(az, el)).collect();
+        let grid: Vec<[f64; 3]> = light_grid(20.0).iter().map(|&(az, el)| polar_unit(az, el)).collect();
         assert_eq!(grid.len(), 162);
         for i in 0..400 {
             // Fibonacci sphere: near-uniform test directions.
