@@ -195,41 +195,6 @@ impl Inverter {
             .collect())
     }
 
-    /// Each of `starts` with each light of `lights` (azimuth, elevation), ranked by how well
-    /// its render matches `target` (the window's pixels): summed squared error, lowest first,
-    /// one list per start. The starts' maps come from one forward pass per `sil` batch; the
-    /// lights are scored on the CPU ([`light::Maps`]). The refinement follows the image
-    /// gradient, which from a light on the wrong side can pull the pose astray before the
-    /// light gets there.
-    #[allow(clippy::too_many_arguments)]
-    fn ranked_lights(&self, gpu: &Gpu, sil: &mut (RenderNet, Executor), grid: &[f32], target: &[f32], starts: &[Vars], win: &Window, lights: &[(f64, f64)]) -> Result<Vec<Vec<(f64, Vars)>>> {
-        let (net, ex) = sil;
-        let batch = net.graph.info(net.pose).shape[0];
-        let [nm, am, mm] = net.maps.expect("Phong head");
-        let ph = phong_of(&self.head_light);
-        let values: Vec<[f32; 6]> = lights.iter().map(|&(az, el)| camera::light_values(&Light { azimuth: az, elevation: el, ..self.head_light })).collect();
-        let mut out = Vec::with_capacity(starts.len());
-        for chunk in starts.chunks(batch) {
-            let mut padded = chunk.to_vec();
-            padded.resize(batch, *chunk.last().expect("chunks are not empty"));
-            self.feed(gpu, net, ex, grid, &padded, win)?;
-            ex.forward(gpu)?;
-            let (normal, albedo, mask) = (ex.read(gpu, nm)?, ex.read(gpu, am)?, ex.read(gpu, mm)?);
-            let hw = target.len() / 3;
-            for (b, start) in chunk.iter().enumerate() {
-                let maps = light::Maps::of(&normal, &albedo, &mask, hw, b);
-                let mut ranked: Vec<(f64, Vars)> = lights
-                    .iter()
-                    .zip(&values)
-                    .map(|(&(az, el), l)| (maps.sse(&ph, l, target), Vars([start.0[0], start.0[1], start.0[2], az, el])))
-                    .collect();
-                ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
-                out.push(ranked);
-            }
-        }
-        Ok(out)
-    }
-
     /// Checks `target`'s size and returns its foreground mask (full image).
     fn foreground(&self, target: &Image) -> Result<Vec<bool>> {
         if target.channels != 3 || target.size != self.size {
@@ -317,21 +282,6 @@ impl Inverter {
         let img: Vec<f32> = ex.read(gpu, net.image)?.into_iter().map(|x| x.clamp(0.0, 1.0)).collect();
         let mse = img.iter().zip(&target.data).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / img.len() as f64;
         Ok(Estimate { view: best.view(), light: best.light(&self.head_light), mse, curve, image: Image { channels: 3, size: self.size, data: img } })
-    }
-
-    /// The light, among every direction of a 5-degree grid, under which the network's render
-    /// of `grid` seen from `view` best matches `target` (image MSE over the window around its
-    /// foreground): the best any light search through this network can do at that camera.
-    /// At the true camera, its distance from the true light is the network's share of a light
-    /// error; the rest is the search's.
-    pub fn light_optimum(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, view: &View) -> Result<Light> {
-        let win = Window::around(&self.preset, &self.foreground(target)?, self.size);
-        let gv = self.grid_values(grid)?;
-        let (net, ex, _) = self.executor(gpu, 1, false, &win)?;
-        let d = Light::default();
-        let start = Vars([view.azimuth, view.elevation, view.radius.ln(), d.azimuth, d.elevation]);
-        let ranked = self.ranked_lights(gpu, &mut (net, ex), &gv, &win.crop_rgb(target), &[start], &win, &light_grid(POLISH_STEP_DEGREES))?;
-        Ok(ranked[0][0].1.light(&self.head_light))
     }
 
     /// The image MSE (unclamped, as the loss op computes it, over the window around the
@@ -612,86 +562,3 @@ pub fn evaluate(
     }
     Ok(out)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The CPU shading the light searches rank lights with draws what the network's Phong op
-    /// draws from the same maps (two starts of one batch, specular on, one light from
-    /// behind), and its squared error is the one the image itself gives; f32 on both sides,
-    /// so 1e-4 of a grey level's 1/255 scale leaves room for rounding only.
-    #[test]
-    fn lights_scored_on_the_cpu_match_the_network_image() {
-        let gpu = Gpu::new().unwrap();
-        let head = Light { ks: 0.4, shininess: 12.0, ..Light::default() };
-        let inv = Inverter::new(Preset::nano(), crate::nn::render::NANO_PHONG_WEIGHTS, "nano", head).unwrap();
-        let gv = inv.grid_values(&crate::voxel::bunny()).unwrap();
-        let win = Window::full(&inv.preset, inv.size);
-        let (net, mut ex, _) = inv.executor(&gpu, 2, false, &win).unwrap();
-        let vars = [Vars([30.0, 70.0, 3.3f64.ln(), 30.0, 60.0]), Vars([200.0, 100.0, 4.0f64.ln(), 160.0, 120.0])];
-        inv.feed(&gpu, &net, &ex, &gv, &vars, &win).unwrap();
-        ex.forward(&gpu).unwrap();
-        let [nm, am, mm] = net.maps.unwrap();
-        let (img, normal, albedo, mask) = (ex.read(&gpu, net.image).unwrap(), ex.read(&gpu, nm).unwrap(), ex.read(&gpu, am).unwrap(), ex.read(&gpu, mm).unwrap());
-        let hw = mask.len() / 2;
-        let ph = phong_of(&head);
-        let target: Vec<f32> = img[..3 * hw].iter().map(|v| v.clamp(0.0, 1.0) * 0.9).collect();
-        for (b, v) in vars.iter().enumerate() {
-            let maps = light::Maps::of(&normal, &albedo, &mask, hw, b);
-            let l = camera::light_values(&v.light(&head));
-            let drawn = &img[b * 3 * hw..(b + 1) * 3 * hw];
-            let worst = maps.shade(&ph, &l).iter().zip(drawn).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
-            assert!(worst < 1e-4, "start {b}: CPU shading differs from the network image by {worst}");
-            assert!(drawn.iter().any(|&x| x > 0.3), "start {b}: nothing lit to compare");
-            let sse: f64 = drawn.iter().zip(&target).map(|(a, t)| ((a.clamp(0.0, 1.0) - t) as f64).powi(2)).sum();
-            assert!((maps.sse(&ph, &l, &target) - sse).abs() < 1e-3 * sse.max(1e-3), "start {b}: squared error {} against {sse}", maps.sse(&ph, &l, &target));
-        }
-    }
-
-    /// Ranking the 20-degree grid's lights at the camera that drew the target puts the grid
-    /// light that drew it first (error ~0, the network's own image), every list best first.
-    #[test]
-    fn light_ranking_puts_the_light_that_drew_the_image_first() {
-        let gpu = Gpu::new().unwrap();
-        let inv = Inverter::new(Preset::nano(), crate::nn::render::NANO_PHONG_WEIGHTS, "nano", Light::default()).unwrap();
-        let gv = inv.grid_values(&crate::voxel::bunny()).unwrap();
-        let win = Window::full(&inv.preset, inv.size);
-        let (net, ex, _) = inv.executor(&gpu, 3, false, &win).unwrap();
-        let mut sil = (net, ex);
-        let truth = Vars([30.0, 70.0, 3.3f64.ln(), 140.0, 70.0]);
-        inv.feed(&gpu, &sil.0, &sil.1, &gv, &[truth; 3], &win).unwrap();
-        sil.1.forward(&gpu).unwrap();
-        let img = sil.1.read(&gpu, sil.0.image).unwrap();
-        let target: Vec<f32> = img[..img.len() / 3].iter().map(|v| v.clamp(0.0, 1.0)).collect();
-        let other = Vars([210.0, 110.0, 5.0f64.ln(), 0.0, 90.0]);
-        let ranked = inv.ranked_lights(&gpu, &mut sil, &gv, &target, &[other, truth], &win, &light_grid(20.0)).unwrap();
-        assert_eq!(ranked.len(), 2);
-        for r in &ranked {
-            assert_eq!(r.len(), 162);
-            assert!(r.windows(2).all(|w| w[0].0 <= w[1].0), "not best first");
-        }
-        let best = ranked[1][0];
-        assert!(best.0 < 1e-6 && (best.1.0[3], best.1.0[4]) == (140.0, 70.0), "best light {:?} with error {}", best.1, best.0);
-        assert!(ranked[0][0].0 > 1.0, "another camera explains the image as well: {}", ranked[0][0].0);
-    }
-
-    /// The network's own best light at the camera that drew its own image is the light that
-    /// drew it, when that light lies on the 5-degree grid.
-    #[test]
-    fn light_optimum_of_the_network_image_is_the_light_that_drew_it() {
-        let gpu = Gpu::new().unwrap();
-        let inv = Inverter::new(Preset::nano(), crate::nn::render::NANO_PHONG_WEIGHTS, "nano", Light::default()).unwrap();
-        let grid = crate::voxel::bunny();
-        let full = Window::full(&inv.preset, inv.size);
-        let (net, mut ex, _) = inv.executor(&gpu, 1, false, &full).unwrap();
-        let truth = Vars([75.0, 60.0, 3.5f64.ln(), 215.0, 122.5]);
-        inv.feed(&gpu, &net, &ex, &inv.grid_values(&grid).unwrap(), &[truth], &full).unwrap();
-        ex.forward(&gpu).unwrap();
-        let data = ex.read(&gpu, net.image).unwrap().into_iter().map(|v| v.clamp(0.0, 1.0)).collect();
-        let target = Image { channels: 3, size: inv.size, data };
-        let l = inv.light_optimum(&gpu, &grid, &target, &truth.view()).unwrap();
-        assert_eq!((l.azimuth, l.elevation), (215.0, 122.5));
-    }
-}
-
