@@ -272,6 +272,37 @@ fn render_and_truth_reject_bad_scene_flags_alike_naming_the_flag() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `truth --out-voxels` writes the scene's grid: a painted procedural shape as a `.vox` that
+/// reads back as the same occupancy and colours (within the palette's 8 bits), so a
+/// MagicaVoxel file of it can be rendered with `render --voxels`; a `.binvox` of a painted grid
+/// (no colour there) and an unknown extension are refused by name.
+#[test]
+fn truth_writes_the_scene_grid_as_voxels() {
+    let dir = scratch("voxels");
+    let (png, vox) = (dir.join("t.png"), dir.join("chair.vox"));
+    let scene = ["truth", "--shape", "chair", "--seed", "9001", "--colour", "--resolution", "16", "--size", "32", "--out", png.to_str().unwrap()];
+    run_ok(&[&scene[..], &["--out-voxels", vox.to_str().unwrap()]].concat());
+    let got = rendernet::voxel::vox::read(&vox).unwrap();
+    let want = rendernet::voxel::Family::Chair.generate(9001).to_coloured_grid(16, 9001).unwrap();
+    assert_eq!(got.dims(), want.dims());
+    assert_eq!(got.occupancy(), want.occupancy());
+    let (gc, wc) = (got.colour().expect("the .vox keeps the colour"), want.colour().unwrap());
+    let cells = want.occupancy().len();
+    for (i, (g, w)) in gc.iter().zip(wc).enumerate() {
+        if want.occupancy()[i % cells] > 0.5 {
+            assert!((g - w).abs() <= 0.5 / 255.0 + 1e-6, "colour {i}: {g} vs {w}");
+        }
+    }
+    for (name, want) in [("chair.binvox", "no colour"), ("chair.png", "--out-voxels")] {
+        let e = run_err(&[&scene[..], &["--out-voxels", dir.join(name).to_str().unwrap()]].concat(), &[]);
+        assert!(e.contains(want) && e.contains(name), "{name}: {e}");
+    }
+    let grey = dir.join("chair.binvox");
+    run_ok(&["truth", "--shape", "chair", "--seed", "9001", "--resolution", "16", "--size", "32", "--out", png.to_str().unwrap(), "--out-voxels", grey.to_str().unwrap()]);
+    assert_eq!(rendernet::voxel::binvox::Binvox::read(&grey).unwrap().grid.occupancy(), rendernet::voxel::Family::Chair.generate(9001).to_grid(16).unwrap().occupancy());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// An output name the build cannot encode fails before rendering and leaves no file (the old
 /// code rendered, then left a 0-byte x.jpg); a successful write leaves no temporary file.
 #[test]

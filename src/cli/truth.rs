@@ -126,6 +126,10 @@ pub struct TruthArgs {
     /// Where to write the PNG (a .png name; written atomically).
     #[arg(long, default_value = "truth.png")]
     out: PathBuf,
+    /// Also write the scene's voxel grid: .vox (keeps colour), .binvox (grey only) or
+    /// .safetensors, e.g. a painted `--shape` as a MagicaVoxel file for `render --voxels`.
+    #[arg(long, value_name = "PATH")]
+    out_voxels: Option<PathBuf>,
 }
 
 pub(crate) fn parse_shader(s: &str) -> std::result::Result<Shader, String> {
@@ -182,6 +186,16 @@ pub fn run(a: TruthArgs) -> Result<()> {
     a.scene.validate(a.size as usize)?;
     super::output::check_png_out(&a.out)?;
     let (grid, what) = load(&a.scene)?;
+    if let Some(path) = &a.out_voxels {
+        match path.extension().and_then(|e| e.to_str()) {
+            Some("vox") => voxel::vox::write(&grid, path).map_err(voxel_err)?,
+            Some("binvox") if grid.colour().is_none() => voxel::binvox::Binvox::from_grid(grid.clone()).write(path).map_err(voxel_err)?,
+            Some("safetensors") => voxel::safetensors_io::write(&grid, path).map_err(voxel_err)?,
+            Some("binvox") => return Err(Error::Invalid(format!("--out-voxels {}: a binvox file has no colour; write .vox or .safetensors", path.display()))),
+            _ => return Err(Error::Invalid(format!("--out-voxels {}: write .vox, .safetensors or (grey grids only) .binvox", path.display()))),
+        }
+        println!("wrote {}", path.display());
+    }
     let gpu = Gpu::new()?;
     let (view, light) = (a.scene.view(), a.scene.light());
     let renderer = RayMarcher::new(&gpu).with_options(Options { supersample: a.supersample, ..Options::default() });
