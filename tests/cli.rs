@@ -521,7 +521,9 @@ fn render_picks_the_colour_weights_for_a_coloured_grid() {
     let png = dir.join("c.png");
     let p = png.to_str().unwrap();
     let out = run_ok(&["render", "--shape", "chair", "--seed", "9001", "--colour", "--size", "64", "--out", p]);
-    assert!(out.contains("embedded tiny-phong-colour weights") && png.exists(), "{out}");
+    assert!(out.contains("embedded base-phong-colour weights") && png.exists(), "{out}");
+    let out = run_ok(&["render", "--shape", "chair", "--seed", "9001", "--colour", "--size", "64", "--preset", "tiny", "--out", p]);
+    assert!(out.contains("embedded tiny-phong-colour weights"), "{out}");
     let out = run_ok(&["render", "--shape", "chair", "--seed", "9001", "--size", "64", "--out", p]);
     assert!(out.contains("embedded base-phong weights (held-out"), "{out}");
     let data = dir.join("data");

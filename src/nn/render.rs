@@ -40,6 +40,12 @@ pub static BASE_PHONG_WEIGHTS: &[u8] = include_bytes!("../../weights/base-phong.
 /// `dataset --colour` (weights/README.md). `render` picks it for a grid that has colour.
 pub static TINY_PHONG_COLOUR_WEIGHTS: &[u8] = include_bytes!("../../weights/tiny-phong-colour.safetensors");
 
+/// The `base` preset for coloured voxels: [`BASE_PHONG_WEIGHTS`] widened to RGB input and
+/// albedo, its colour path taken from [`TINY_PHONG_COLOUR_WEIGHTS`], fine-tuned on `dataset
+/// --colour` (weights/README.md). The most accurate colour model: `render`'s default for a
+/// grid that has colour.
+pub static BASE_PHONG_COLOUR_WEIGHTS: &[u8] = include_bytes!("../../weights/base-phong-colour.safetensors");
+
 /// A shipped Phong model and its measured accuracy, for picking one by quality.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShippedModel {
@@ -83,7 +89,11 @@ pub fn shipped_phong_weights(preset: &Preset) -> Option<&'static [u8]> {
 /// tiny's Phong weights).
 pub fn shipped_weights(preset: &Preset, shader: Shader) -> Option<&'static [u8]> {
     if preset.colour {
-        return (preset.name == "tiny" && shader == Shader::Phong).then_some(TINY_PHONG_COLOUR_WEIGHTS);
+        return match (preset.name, shader) {
+            ("tiny", Shader::Phong) => Some(TINY_PHONG_COLOUR_WEIGHTS),
+            ("base", Shader::Phong) => Some(BASE_PHONG_COLOUR_WEIGHTS),
+            _ => None,
+        };
     }
     match (preset.name, shader) {
         ("tiny", Shader::Phong) => Some(TINY_PHONG_WEIGHTS),
