@@ -172,6 +172,16 @@ pub(super) fn voxels_format(path: &std::path::Path, colour: bool) -> Result<&str
     }
 }
 
+/// Writes `grid` to `path` in `format` (one [`voxels_format`] returned).
+pub(super) fn write_voxels(grid: &rendernet::voxel::VoxelGrid, path: &std::path::Path, format: &str) -> Result<()> {
+    match format {
+        "vox" => rendernet::voxel::vox::write(grid, path)?,
+        "binvox" => rendernet::voxel::binvox::Binvox::from_grid(grid.clone()).write(path)?,
+        _ => rendernet::voxel::safetensors_io::write(grid, path)?,
+    }
+    Ok(())
+}
+
 /// `invert --prior`: shape, camera and light recovered together; writes the grid and the
 /// picture, and reports the errors when the truth is known.
 #[allow(clippy::too_many_arguments)]
@@ -188,10 +198,7 @@ fn with_prior(a: &InvertArgs, gpu: &Gpu, inv: &Inverter, prior: Option<&std::pat
     bar.finish_and_clear();
     let secs = t1.elapsed().as_secs_f64();
     let grid = &est.shape.grid;
-    match ext {
-        "binvox" => rendernet::voxel::binvox::Binvox::from_grid(grid.clone()).write(&out_voxels)?,
-        _ => rendernet::voxel::safetensors_io::write(grid, &out_voxels)?,
-    }
+    write_voxels(grid, &out_voxels, ext)?;
     let (view, light) = (est.pose.view, est.pose.light);
     let turned = rendernet::reference::View { azimuth: (view.azimuth + 90.0) % 360.0, ..view };
     let side = reference::RayMarcher::new(gpu).render(gpu, grid, &turned, &light, Shader::Phong, inv.size() as u32)?;

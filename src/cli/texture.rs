@@ -163,10 +163,7 @@ pub fn invert_texture(
     let est = inv.recover_texture(gpu, &TexturePreset::small(), &tex, grid, &one, &s.options())?;
     bar.finish_and_clear();
     let secs = t1.elapsed().as_secs_f64();
-    match super::invert::voxels_format(out_voxels, true)? {
-        "vox" => rendernet::voxel::vox::write(&est.grid, out_voxels)?,
-        _ => rendernet::voxel::safetensors_io::write(&est.grid, out_voxels)?,
-    }
+    super::invert::write_voxels(&est.grid, out_voxels, super::invert::voxels_format(out_voxels, true)?)?;
     let turned = View { azimuth: (view.azimuth + 90.0) % 360.0, ..view };
     let seen = rm.render(gpu, &est.grid, &view, &light, Shader::Phong, size)?;
     let side = rm.render(gpu, &est.grid, &turned, &light, Shader::Phong, size)?;

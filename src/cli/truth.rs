@@ -187,13 +187,10 @@ pub fn run(a: TruthArgs) -> Result<()> {
     super::output::check_png_out(&a.out)?;
     let (grid, what) = load(&a.scene)?;
     if let Some(path) = &a.out_voxels {
-        match path.extension().and_then(|e| e.to_str()) {
-            Some("vox") => voxel::vox::write(&grid, path).map_err(voxel_err)?,
-            Some("binvox") if grid.colour().is_none() => voxel::binvox::Binvox::from_grid(grid.clone()).write(path).map_err(voxel_err)?,
-            Some("safetensors") => voxel::safetensors_io::write(&grid, path).map_err(voxel_err)?,
-            Some("binvox") => return Err(Error::Invalid(format!("--out-voxels {}: a binvox file has no colour; write .vox or .safetensors", path.display()))),
-            _ => return Err(Error::Invalid(format!("--out-voxels {}: write .vox, .safetensors or (grey grids only) .binvox", path.display()))),
-        }
+        // A grey grid may go to .vox too (MagicaVoxel's own file), not only to what `invert`
+        // writes grey grids as; a coloured one never to .binvox.
+        let vox = path.extension().is_some_and(|e| e == "vox");
+        super::invert::write_voxels(&grid, path, super::invert::voxels_format(path, grid.colour().is_some() || vox)?)?;
         println!("wrote {}", path.display());
     }
     let gpu = Gpu::new()?;
