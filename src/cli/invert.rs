@@ -37,7 +37,9 @@ pub struct InvertArgs {
     #[arg(long, default_value_t = InvertOptions::default().elevations)]
     elevations: usize,
     /// Starts refined by gradient descent: the coarse views (and their opposite-side twins),
-    /// each with its best of 12 light starts, with the lowest image MSE.
+    /// each with its best light of a 20-degree grid, ranked by image MSE; the best 2 x
+    /// starts are subdivided (the 8 views half a grid step away) and the best `starts` of
+    /// those refined.
     #[arg(long, default_value_t = InvertOptions::default().keep)]
     starts: usize,
     /// Gradient steps of the refinement (the light polish after it takes half as many).
@@ -257,7 +259,8 @@ pub struct EvalInvertArgs {
     /// Refinement steps per sample.
     #[arg(long, default_value_t = InvertOptions::default().steps)]
     steps: usize,
-    /// Starts refined per sample (the best by silhouette, each with its opposite-side twin).
+    /// Starts refined per sample (as `invert --starts`: the best views by image MSE after the
+    /// coarse grid's subdivision).
     #[arg(long, default_value_t = InvertOptions::default().keep)]
     starts: usize,
     /// Print JSON instead of text.
@@ -295,6 +298,10 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
     let radius: Vec<f64> = errs.iter().map(|e| (e.radius_ratio - 1.0).abs()).collect();
     let within = |xs: &[f64], t: f64| xs.iter().filter(|&&x| x <= t).count() as f64 / xs.len().max(1) as f64;
     let secs = Interval::of(&errs.iter().map(|e| e.seconds).collect::<Vec<_>>());
+    // Cameras more than 10 degrees off, split by who failed: the search (the true camera
+    // scores better than what it found) or the network (the wrong view scores better).
+    let off: Vec<&invert::InvertError> = errs.iter().filter(|e| e.pose_degrees > 10.0).collect();
+    let search_failures = off.iter().filter(|e| e.truth_mse < e.search_mse).count();
     if a.json {
         let j = serde_json::json!({
             "samples": errs.len(),
@@ -304,10 +311,12 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
             "light_error_median_degrees": median(&light), "light_within_10_degrees": within(&light, 10.0),
             "light_optimum_error_median_degrees": median(&optimum), "light_optimum_within_10_degrees": within(&optimum, 10.0),
             "radius_relative_error_median": median(&radius),
+            "pose_off_by_10_degrees": off.len(), "pose_off_search_failures": search_failures,
             "seconds_per_image": secs.mean,
             "per_sample": errs.iter().map(|e| serde_json::json!({
                 "shape": e.shape_id, "pose_degrees": e.pose_degrees, "light_degrees": e.light_degrees,
-                "light_optimum_degrees": e.light_optimum_degrees, "radius_ratio": e.radius_ratio, "mse": e.mse, "seconds": e.seconds})).collect::<Vec<_>>(),
+                "light_optimum_degrees": e.light_optimum_degrees, "radius_ratio": e.radius_ratio, "mse": e.mse,
+                "truth_mse": e.truth_mse, "search_mse": e.search_mse, "seconds": e.seconds})).collect::<Vec<_>>(),
         });
         println!("{}", serde_json::to_string_pretty(&j).map_err(|e| Error::Invalid(e.to_string()))?);
         return Ok(());
@@ -323,6 +332,13 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
         "the network's own best light at the true camera (5-degree grid): median {:.1} deg from the truth, within 10 deg {:.0}%",
         median(&optimum),
         100.0 * within(&optimum, 10.0)
+    );
+    println!(
+        "cameras more than 10 deg off: {} of {}; {} of them the search's (the true camera scores a lower image MSE), {} the network's (the wrong view scores lower)",
+        off.len(),
+        errs.len(),
+        search_failures,
+        off.len() - search_failures
     );
     println!("radius relative error: median {:.3}", median(&radius));
     println!("{:.1} s per image (mean)", secs.mean);

@@ -6,7 +6,10 @@
 //! scored by how well the network's predicted mask overlaps the image's foreground (light
 //! does not change a silhouette, so this search ignores it); each start's radius is then set
 //! from the ratio of silhouette areas (orthographic: area scales with `1 / radius^2`) and
-//! every start is re-scored there. The survivors are refined together, one batch, by Adam on
+//! every start is re-scored there. Every distinct view (with its opposite-side twin) is then
+//! ranked by image MSE under its best light, and the grid is subdivided around the best
+//! (the 8 views half a step away), as the paper does. The survivors are refined together,
+//! one batch, by Adam on
 //! `(azimuth, elevation, ln radius, light azimuth, light elevation)` with the image MSE as
 //! loss; gradients reach the pose through the resampling op and the light through the Phong
 //! op. The start with the lowest final MSE wins.
@@ -28,7 +31,7 @@ use crate::nn::rendernet::{Head, Preset, RenderNet, phong_of};
 use crate::ops::loss::Loss;
 use crate::reference::{Image, Light, View};
 use crate::voxel::VoxelGrid;
-use starts::{POLISH_STEP_DEGREES, POLISHED, distinct_lights, light_grid, light_starts, with_twins};
+use starts::{POLISH_STEP_DEGREES, POLISHED, best_of_neighbours, distinct_lights, light_grid, light_starts, neighbours, with_twins};
 
 /// Search settings.
 #[derive(Clone, Debug)]
@@ -256,6 +259,15 @@ impl Inverter {
         let views = with_twins(rescored.iter().map(|s| s.1), usize::MAX);
         let mut pool: Vec<(f64, Vars)> = self.ranked_lights(gpu, &mut sil, &gv, &target_crop, &views, &win, &light_starts())?.into_iter().map(|r| r[0]).collect();
         pool.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // Subdivision (the paper's): the coarse grid can leave the true camera 20 degrees
+        // from its nearest start, far enough for a wrong view to score better. Around each of
+        // the best 2 * keep views, the 8 views half a step away are ranked the same way and
+        // the best of the 9 stands for it.
+        pool.truncate(2 * o.keep);
+        let (daz, del) = (180.0 / o.azimuths as f64, 90.0 / o.elevations as f64);
+        let around: Vec<Vars> = pool.iter().flat_map(|p| neighbours(p.1, daz, del)).collect();
+        let ranked = self.ranked_lights(gpu, &mut sil, &gv, &target_crop, &around, &win, &light_starts())?;
+        best_of_neighbours(&mut pool, &ranked);
         let mut vars: Vec<Vars> = pool.into_iter().take(o.keep).map(|p| p.1).collect();
         let (mut best, mut curve) = self.refine(gpu, &gv, &target_crop, &mut vars, o, &mut progress, &win)?;
         // Light polish: Adam from the 12 light starts can settle in a local minimum tens of
@@ -282,6 +294,19 @@ impl Inverter {
         let img: Vec<f32> = ex.read(gpu, net.image)?.into_iter().map(|x| x.clamp(0.0, 1.0)).collect();
         let mse = img.iter().zip(&target.data).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / img.len() as f64;
         Ok(Estimate { view: best.view(), light: best.light(&self.head_light), mse, curve, image: Image { channels: 3, size: self.size, data: img } })
+    }
+
+    /// The image MSE over the window around `target`'s foreground (clamped, as
+    /// [`Estimate::curve`] scores) after the search's refinement (`o.steps` Adam steps on
+    /// camera and light) started at `view` and `light`: started at the true camera and the
+    /// network's best light there ([`Inverter::light_optimum`]), the lowest score the search
+    /// could reach near the truth, which tells a search's failure from the network's.
+    pub fn refined_mse(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, view: &View, light: &Light, o: &InvertOptions) -> Result<f64> {
+        let win = Window::around(&self.preset, &self.foreground(target)?, self.size);
+        let gv = self.grid_values(grid)?;
+        let mut vars = [Vars([view.azimuth, view.elevation, view.radius.ln(), light.azimuth, light.elevation])];
+        let (_, curve) = self.refine(gpu, &gv, &win.crop_rgb(target), &mut vars, o, &mut |_, _| {}, &win)?;
+        Ok(*curve.last().expect("at least one step"))
     }
 
     /// The image MSE (unclamped, as the loss op computes it, over the window around the
@@ -518,6 +543,14 @@ pub struct InvertError {
     /// Angle between the true light and the network's own best light at the true camera
     /// ([`Inverter::light_optimum`]), degrees: what no light search could improve on.
     pub light_optimum_degrees: f64,
+    /// Image MSE over the search window after the search's refinement started at the true
+    /// camera and the network's best grid light there ([`Inverter::refined_mse`]).
+    pub truth_mse: f64,
+    /// Image MSE over the search window at the estimate (`Estimate::curve`'s last value,
+    /// scored the same way). A pose far off with `truth_mse < search_mse` is the search's
+    /// failure (a better-scoring camera existed); with `truth_mse >= search_mse` the network's
+    /// (its render from the wrong view explains the image better).
+    pub search_mse: f64,
     /// Recovered radius over the true one.
     pub radius_ratio: f64,
     /// Image MSE of the re-render against the input.
@@ -549,14 +582,19 @@ pub fn evaluate(
         let target = phong_target(ds, &s)?;
         let t = std::time::Instant::now();
         let est = inv.invert(gpu, &s.grid, target, o, |_, _| {})?;
+        let seconds = t.elapsed().as_secs_f64();
+        let (optimum, _) = inv.light_optimum(gpu, &s.grid, target, &s.view)?;
+        let truth_mse = inv.refined_mse(gpu, &s.grid, target, &s.view, &optimum, o)?;
         out.push(InvertError {
             shape_id: s.shape_id,
             pose_degrees: angle_between(view_direction(&s.view), view_direction(&est.view)),
             light_degrees: angle_between(light_direction(&s.light), light_direction(&est.light)),
-            light_optimum_degrees: angle_between(light_direction(&s.light), light_direction(&inv.light_optimum(gpu, &s.grid, target, &s.view)?)),
+            light_optimum_degrees: angle_between(light_direction(&s.light), light_direction(&optimum)),
+            truth_mse,
+            search_mse: *est.curve.last().expect("at least one step"),
             radius_ratio: est.view.radius / s.view.radius,
             mse: est.mse,
-            seconds: t.elapsed().as_secs_f64(),
+            seconds,
         });
         progress(k + 1, n);
     }

@@ -60,6 +60,38 @@ pub(super) fn with_twins(ranked: impl Iterator<Item = Vars>, keep: usize) -> Vec
     out
 }
 
+/// The 8 views around `v` half a coarse grid step away (`daz` azimuth, `del` elevation,
+/// degrees; elevations kept inside (0, 180)), radius and light kept: the paper's subdivision
+/// of the start grid around its best views.
+pub(super) fn neighbours(v: Vars, daz: f64, del: f64) -> Vec<Vars> {
+    let mut out = Vec::with_capacity(8);
+    for de in [-1.0, 0.0, 1.0] {
+        for da in [-1.0, 0.0, 1.0] {
+            if (da, de) != (0.0, 0.0) {
+                let mut n = v;
+                n.0[0] = (v.0[0] + da * daz).rem_euclid(360.0);
+                n.0[1] = (v.0[1] + de * del).clamp(1.0, 179.0);
+                out.push(n);
+            }
+        }
+    }
+    out
+}
+
+/// Each `(score, start)` of `pool` replaced by the best of itself and its 8 neighbours
+/// (`ranked`: a best-first list of scored lights per neighbour, 8 per pool entry, as
+/// [`neighbours`] gives them), then the pool sorted best first.
+pub(super) fn best_of_neighbours(pool: &mut [(f64, Vars)], ranked: &[Vec<(f64, Vars)>]) {
+    for (p, r) in pool.iter_mut().zip(ranked.chunks(8)) {
+        for &n in r.iter().map(|x| &x[0]) {
+            if n.0 < p.0 {
+                *p = n;
+            }
+        }
+    }
+    pool.sort_by(|a, b| a.0.total_cmp(&b.0));
+}
+
 /// Whether directions `a` and `b` (azimuth, elevation in degrees) are within 30 degrees of
 /// each other.
 fn within_30_degrees(a: (f64, f64), b: (f64, f64)) -> bool {
@@ -83,6 +115,32 @@ mod tests {
         let kept: Vec<[f64; 2]> = with_twins(ranked.into_iter(), 4).iter().map(|k| [k.0[0], k.0[1]]).collect();
         assert_eq!(kept, [[30.0, 70.0], [210.0, 70.0], [120.0, 90.0], [300.0, 90.0]]);
         assert_eq!(with_twins(ranked.into_iter(), 1).len(), 1);
+    }
+
+    /// The subdivision's views: 8, each half a step from the centre along one or both axes,
+    /// azimuth wrapped, elevation kept off the poles, radius and light unchanged.
+    #[test]
+    fn neighbours_surround_a_view_half_a_step_away() {
+        let c = Vars([350.0, 170.0, 1.5, 30.0, 60.0]);
+        let n = neighbours(c, 15.0, 18.0);
+        assert_eq!(n.len(), 8);
+        let mut got: Vec<[f64; 2]> = n.iter().map(|k| [k.0[0], k.0[1]]).collect();
+        got.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        assert_eq!(got, [[5.0, 152.0], [5.0, 170.0], [5.0, 179.0], [335.0, 152.0], [335.0, 170.0], [335.0, 179.0], [350.0, 152.0], [350.0, 179.0]]);
+        assert!(n.iter().all(|k| k.0[2..] == c.0[2..]));
+    }
+
+    /// Subdivision: a view whose neighbour scores better is replaced by that neighbour (its
+    /// best light), one whose neighbours all score worse stays, and the pool is re-ranked.
+    #[test]
+    fn subdivision_keeps_the_best_of_each_view_and_its_neighbours() {
+        let mut pool = vec![(1.0, v(0.0, 90.0)), (2.0, v(120.0, 90.0))];
+        let scored = |s: f64, az: f64| vec![(s, v(az, 90.0)), (s + 5.0, v(az, 90.0))];
+        let mut ranked: Vec<Vec<(f64, Vars)>> = (0..8).map(|k| scored(3.0 + k as f64, 15.0)).collect();
+        ranked.extend((0..8).map(|k| scored(if k == 5 { 0.5 } else { 4.0 }, 135.0 + k as f64)));
+        best_of_neighbours(&mut pool, &ranked);
+        let got: Vec<(f64, f64)> = pool.iter().map(|p| (p.0, p.1.0[0])).collect();
+        assert_eq!(got, [(0.5, 140.0), (1.0, 0.0)]);
     }
 
     /// The polish's lights: best first, neighbours within 30 degrees of a taken one skipped
