@@ -87,9 +87,9 @@ impl Inverter {
     /// foreground): the best any light search through this network can do at that camera.
     /// At the true camera, its distance from the true light is the network's share of a light
     /// error; the rest is the search's. Also returns that render's image MSE over the window
-    /// (clamped, as the search scores its estimate: `Estimate::curve`'s last value): at the
-    /// true camera, an estimate far from it that scores higher is the search's failure, one
-    /// that scores lower the network's (it explains the image better from the wrong view).
+    /// (clamped, as the search scores its estimate), before any refinement: at the true
+    /// camera it is where [`Inverter::refined_mse`] starts to tell the search's failures from
+    /// the network's.
     pub fn light_optimum(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, view: &View) -> Result<(Light, f64)> {
         let win = Window::around(&self.preset, &self.foreground(target)?, self.size);
         let gv = self.grid_values(grid)?;
