@@ -87,16 +87,13 @@ impl Inverter {
     /// foreground): the best any light search through this network can do at that camera.
     /// At the true camera, its distance from the true light is the network's share of a light
     /// error; the rest is the search's. Also returns that render's image MSE over the window
-    /// (clamped, as the search scores its estimate), before any refinement: at the true
-    /// camera it is where [`Inverter::refined_mse`] starts to tell the search's failures from
-    /// the network's.
+    /// (clamped, as the search scores its estimate), before any refinement; at the true
+    /// camera, [`Inverter::refined_mse`] refines from this light.
     pub fn light_optimum(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, view: &View) -> Result<(Light, f64)> {
-        let win = Window::around(&self.preset, &self.foreground(target)?, self.size);
-        let gv = self.grid_values(grid)?;
+        let (win, gv, t) = self.windowed(grid, target)?;
         let (net, ex, _) = self.executor(gpu, 1, false, &win)?;
         let d = Light::default();
         let start = Vars([view.azimuth, view.elevation, view.radius.ln(), d.azimuth, d.elevation]);
-        let t = win.crop_rgb(target);
         let ranked = self.ranked_lights(gpu, &mut (net, ex), &gv, &t, &[start], &win, &light_grid(POLISH_STEP_DEGREES))?;
         let (sse, best) = ranked[0][0];
         Ok((best.light(&self.head_light), sse / t.len() as f64))

@@ -15,11 +15,14 @@
 //! op. The start with the lowest final MSE wins.
 
 mod code;
+mod eval;
 mod light;
 mod shape;
 mod texture;
 mod starts;
 pub use texture::{TextureError, TextureEstimate, TextureOptions, evaluate_textures, texture_starts};
+pub use eval::{InvertError, angle_between, evaluate, light_direction, view_direction};
+use eval::phong_target;
 pub use shape::{JointEstimate, PoseSource, ShapeError, ShapeEstimate, ShapeOptions, ShapeView, decode_codes, evaluate_shapes};
 
 use crate::error::{Error, Result};
@@ -302,10 +305,9 @@ impl Inverter {
     /// network's best light there ([`Inverter::light_optimum`]), the lowest score the search
     /// could reach near the truth, which tells a search's failure from the network's.
     pub fn refined_mse(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, view: &View, light: &Light, o: &InvertOptions) -> Result<f64> {
-        let win = Window::around(&self.preset, &self.foreground(target)?, self.size);
-        let gv = self.grid_values(grid)?;
+        let (win, gv, t) = self.windowed(grid, target)?;
         let mut vars = [Vars([view.azimuth, view.elevation, view.radius.ln(), light.azimuth, light.elevation])];
-        let (_, curve) = self.refine(gpu, &gv, &win.crop_rgb(target), &mut vars, o, &mut |_, _| {}, &win)?;
+        let (_, curve) = self.refine(gpu, &gv, &t, &mut vars, o, &mut |_, _| {}, &win)?;
         Ok(*curve.last().expect("at least one step"))
     }
 
@@ -316,10 +318,8 @@ impl Inverter {
     /// descends, exposed for callers with their own optimiser (and for testing against
     /// finite differences).
     pub fn gradient(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, unknowns: &[[f64; 5]]) -> Result<Vec<(f64, [f64; 5])>> {
-        let win = Window::around(&self.preset, &self.foreground(target)?, self.size);
-        let gv = self.grid_values(grid)?;
+        let (win, gv, t) = self.windowed(grid, target)?;
         let vars: Vec<Vars> = unknowns.iter().map(|&u| Vars(u)).collect();
-        let t = win.crop_rgb(target);
         let mut d = Descent::new(self, gpu, &t, vars.len(), &win)?;
         let (img, grads) = d.step(self, gpu, &gv, &vars, &win)?;
         Ok(img
@@ -327,6 +327,14 @@ impl Inverter {
             .zip(grads)
             .map(|(y, g)| (y.iter().zip(&t).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / t.len() as f64, g))
             .collect())
+    }
+
+    /// What a search of one image renders: the window around `target`'s foreground, the
+    /// network's input values of `grid` and the target's pixels inside the window.
+    fn windowed(&self, grid: &VoxelGrid, target: &Image) -> Result<(Window, Vec<f32>, Vec<f32>)> {
+        let win = Window::around(&self.preset, &self.foreground(target)?, self.size);
+        let t = win.crop_rgb(target);
+        Ok((win, self.grid_values(grid)?, t))
     }
 
     fn grid_values(&self, grid: &VoxelGrid) -> Result<Vec<f32>> {
@@ -512,91 +520,4 @@ fn chain(v: &Vars, gp: &[f32], gl: &[f32], p: &Preset) -> [f64; 5] {
 fn polar_unit(az: f64, el: f64) -> [f64; 3] {
     let (az, el) = (az.to_radians(), el.to_radians());
     [az.sin() * el.sin(), el.cos(), az.cos() * el.sin()]
-}
-
-/// A unit vector for `view`'s azimuth and elevation, for measuring pose errors as angles
-/// (the angle between two views' vectors is the angle between their camera directions).
-pub fn view_direction(view: &View) -> [f64; 3] {
-    polar_unit(view.azimuth, view.elevation)
-}
-
-/// Unit vector towards the light in the camera frame ([`Light::direction`] in f64).
-pub fn light_direction(light: &Light) -> [f64; 3] {
-    polar_unit(light.azimuth, light.elevation)
-}
-
-/// Angle in degrees between two unit vectors.
-pub fn angle_between(a: [f64; 3], b: [f64; 3]) -> f64 {
-    let d: f64 = (0..3).map(|i| a[i] * b[i]).sum();
-    d.clamp(-1.0, 1.0).acos().to_degrees()
-}
-
-/// How far one inversion landed from the known scene.
-#[derive(Clone, Copy, Debug)]
-pub struct InvertError {
-    /// Shape the sample shows.
-    pub shape_id: u32,
-    /// Angle between the true and recovered camera directions, degrees.
-    pub pose_degrees: f64,
-    /// Angle between the true and recovered light directions, degrees.
-    pub light_degrees: f64,
-    /// Angle between the true light and the network's own best light at the true camera
-    /// ([`Inverter::light_optimum`]), degrees: what no light search could improve on.
-    pub light_optimum_degrees: f64,
-    /// Image MSE over the search window after the search's refinement started at the true
-    /// camera and the network's best grid light there ([`Inverter::refined_mse`]).
-    pub truth_mse: f64,
-    /// Image MSE over the search window at the estimate (`Estimate::curve`'s last value,
-    /// scored the same way). A pose far off with `truth_mse < search_mse` is the search's
-    /// failure (a better-scoring camera existed); with `truth_mse >= search_mse` the network's
-    /// (its render from the wrong view explains the image better).
-    pub search_mse: f64,
-    /// Recovered radius over the true one.
-    pub radius_ratio: f64,
-    /// Image MSE of the re-render against the input.
-    pub mse: f64,
-    /// Wall time of the inversion.
-    pub seconds: f64,
-}
-
-/// The reference Phong image of a sample of `ds`, or an error naming the dataset.
-fn phong_target<'a>(ds: &crate::data::Dataset, s: &'a crate::data::Sample) -> Result<&'a Image> {
-    s.images.get("phong").ok_or_else(|| Error::Invalid(format!("{}: not a Phong dataset (no 'phong' images)", ds.dir().display())))
-}
-
-/// Inverts `samples` held-out samples of `ds` (spread over the split; 0 = all) from their
-/// target images, with the grid known, and measures the errors. `progress(done, total)`.
-pub fn evaluate(
-    gpu: &Gpu,
-    inv: &Inverter,
-    ds: &crate::data::Dataset,
-    samples: usize,
-    o: &InvertOptions,
-    mut progress: impl FnMut(usize, usize),
-) -> Result<Vec<InvertError>> {
-    let test = ds.split(crate::data::Split::Test);
-    let n = test.spread(samples).count();
-    let mut out = Vec::with_capacity(n);
-    for (k, i) in test.spread(samples).enumerate() {
-        let s = test.get(i)?;
-        let target = phong_target(ds, &s)?;
-        let t = std::time::Instant::now();
-        let est = inv.invert(gpu, &s.grid, target, o, |_, _| {})?;
-        let seconds = t.elapsed().as_secs_f64();
-        let (optimum, _) = inv.light_optimum(gpu, &s.grid, target, &s.view)?;
-        let truth_mse = inv.refined_mse(gpu, &s.grid, target, &s.view, &optimum, o)?;
-        out.push(InvertError {
-            shape_id: s.shape_id,
-            pose_degrees: angle_between(view_direction(&s.view), view_direction(&est.view)),
-            light_degrees: angle_between(light_direction(&s.light), light_direction(&est.light)),
-            light_optimum_degrees: angle_between(light_direction(&s.light), light_direction(&optimum)),
-            truth_mse,
-            search_mse: *est.curve.last().expect("at least one step"),
-            radius_ratio: est.view.radius / s.view.radius,
-            mse: est.mse,
-            seconds,
-        });
-        progress(k + 1, n);
-    }
-    Ok(out)
 }

@@ -1,0 +1,95 @@
+//! Inverse rendering measured on held-out samples of a dataset (`rendernet eval-invert`):
+//! camera, light and radius errors against the known scene, and whose failure a wrong camera
+//! is, the search's or the network's.
+
+use super::{InvertOptions, Inverter, polar_unit};
+use crate::error::{Error, Result};
+use crate::gpu::Gpu;
+use crate::reference::{Image, Light, View};
+
+/// A unit vector for `view`'s azimuth and elevation, for measuring pose errors as angles
+/// (the angle between two views' vectors is the angle between their camera directions).
+pub fn view_direction(view: &View) -> [f64; 3] {
+    polar_unit(view.azimuth, view.elevation)
+}
+
+/// Unit vector towards the light in the camera frame ([`Light::direction`] in f64).
+pub fn light_direction(light: &Light) -> [f64; 3] {
+    polar_unit(light.azimuth, light.elevation)
+}
+
+/// Angle in degrees between two unit vectors.
+pub fn angle_between(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let d: f64 = (0..3).map(|i| a[i] * b[i]).sum();
+    d.clamp(-1.0, 1.0).acos().to_degrees()
+}
+
+/// How far one inversion landed from the known scene.
+#[derive(Clone, Copy, Debug)]
+pub struct InvertError {
+    /// Shape the sample shows.
+    pub shape_id: u32,
+    /// Angle between the true and recovered camera directions, degrees.
+    pub pose_degrees: f64,
+    /// Angle between the true and recovered light directions, degrees.
+    pub light_degrees: f64,
+    /// Angle between the true light and the network's own best light at the true camera
+    /// ([`Inverter::light_optimum`]), degrees: what no light search could improve on.
+    pub light_optimum_degrees: f64,
+    /// Image MSE over the search window after the search's refinement started at the true
+    /// camera and the network's best grid light there ([`Inverter::refined_mse`]).
+    pub truth_mse: f64,
+    /// Image MSE over the search window at the estimate (`Estimate::curve`'s last value,
+    /// scored the same way). A pose far off with `truth_mse < search_mse` is the search's
+    /// failure (a better-scoring camera existed); with `truth_mse >= search_mse` the network's
+    /// (its render from the wrong view explains the image better).
+    pub search_mse: f64,
+    /// Recovered radius over the true one.
+    pub radius_ratio: f64,
+    /// Image MSE of the re-render against the input.
+    pub mse: f64,
+    /// Wall time of the inversion.
+    pub seconds: f64,
+}
+
+/// The reference Phong image of a sample of `ds`, or an error naming the dataset.
+pub(super) fn phong_target<'a>(ds: &crate::data::Dataset, s: &'a crate::data::Sample) -> Result<&'a Image> {
+    s.images.get("phong").ok_or_else(|| Error::Invalid(format!("{}: not a Phong dataset (no 'phong' images)", ds.dir().display())))
+}
+
+/// Inverts `samples` held-out samples of `ds` (spread over the split; 0 = all) from their
+/// target images, with the grid known, and measures the errors. `progress(done, total)`.
+pub fn evaluate(
+    gpu: &Gpu,
+    inv: &Inverter,
+    ds: &crate::data::Dataset,
+    samples: usize,
+    o: &InvertOptions,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Vec<InvertError>> {
+    let test = ds.split(crate::data::Split::Test);
+    let n = test.spread(samples).count();
+    let mut out = Vec::with_capacity(n);
+    for (k, i) in test.spread(samples).enumerate() {
+        let s = test.get(i)?;
+        let target = phong_target(ds, &s)?;
+        let t = std::time::Instant::now();
+        let est = inv.invert(gpu, &s.grid, target, o, |_, _| {})?;
+        let seconds = t.elapsed().as_secs_f64();
+        let (optimum, _) = inv.light_optimum(gpu, &s.grid, target, &s.view)?;
+        let truth_mse = inv.refined_mse(gpu, &s.grid, target, &s.view, &optimum, o)?;
+        out.push(InvertError {
+            shape_id: s.shape_id,
+            pose_degrees: angle_between(view_direction(&s.view), view_direction(&est.view)),
+            light_degrees: angle_between(light_direction(&s.light), light_direction(&est.light)),
+            light_optimum_degrees: angle_between(light_direction(&s.light), light_direction(&optimum)),
+            truth_mse,
+            search_mse: *est.curve.last().expect("at least one step"),
+            radius_ratio: est.view.radius / s.view.radius,
+            mse: est.mse,
+            seconds,
+        });
+        progress(k + 1, n);
+    }
+    Ok(out)
+}
