@@ -263,6 +263,12 @@ pub struct EvalInvertArgs {
     /// coarse grid's subdivision).
     #[arg(long, default_value_t = InvertOptions::default().keep)]
     starts: usize,
+    /// Azimuth starts of the coarse search (as `invert --azimuths`).
+    #[arg(long, default_value_t = InvertOptions::default().azimuths)]
+    azimuths: usize,
+    /// Elevation starts of the coarse search (as `invert --elevations`).
+    #[arg(long, default_value_t = InvertOptions::default().elevations)]
+    elevations: usize,
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
@@ -284,7 +290,7 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
     let gpu = Gpu::new()?;
     let ds = Dataset::open(&a.data)?;
     let (inv, name) = dataset_inverter(&a.net, &ds)?;
-    let o = InvertOptions { steps: a.steps, keep: a.starts, ..Default::default() };
+    let o = InvertOptions { azimuths: a.azimuths, elevations: a.elevations, keep: a.starts, steps: a.steps, ..Default::default() };
     let bar = ProgressBar::new(a.samples as u64);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} images [{elapsed_precise}<{eta_precise}]").expect("static template"));
     let errs = invert::evaluate(&gpu, &inv, &ds, a.samples, &o, |done, total| {
@@ -295,6 +301,8 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
     let pose: Vec<f64> = errs.iter().map(|e| e.pose_degrees).collect();
     let light: Vec<f64> = errs.iter().map(|e| e.light_degrees).collect();
     let optimum: Vec<f64> = errs.iter().map(|e| e.light_optimum_degrees).collect();
+    let exact: Vec<f64> = errs.iter().map(|e| e.light_exact_degrees).collect();
+    let exact_truth: Vec<f64> = errs.iter().map(|e| e.light_exact_truth_degrees).collect();
     let radius: Vec<f64> = errs.iter().map(|e| (e.radius_ratio - 1.0).abs()).collect();
     let within = |xs: &[f64], t: f64| xs.iter().filter(|&&x| x <= t).count() as f64 / xs.len().max(1) as f64;
     let secs = Interval::of(&errs.iter().map(|e| e.seconds).collect::<Vec<_>>());
@@ -310,12 +318,14 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
             "pose_within_5_degrees": within(&pose, 5.0), "pose_within_10_degrees": within(&pose, 10.0),
             "light_error_median_degrees": median(&light), "light_within_10_degrees": within(&light, 10.0),
             "light_optimum_error_median_degrees": median(&optimum), "light_optimum_within_10_degrees": within(&optimum, 10.0),
+            "light_exact_error_median_degrees": median(&exact), "light_exact_within_10_degrees": within(&exact, 10.0),
+            "light_exact_truth_error_median_degrees": median(&exact_truth), "light_exact_truth_within_10_degrees": within(&exact_truth, 10.0),
             "radius_relative_error_median": median(&radius),
             "pose_off_by_10_degrees": off.len(), "pose_off_search_failures": search_failures,
             "seconds_per_image": secs.mean,
             "per_sample": errs.iter().map(|e| serde_json::json!({
                 "shape": e.shape_id, "pose_degrees": e.pose_degrees, "light_degrees": e.light_degrees,
-                "light_optimum_degrees": e.light_optimum_degrees, "radius_ratio": e.radius_ratio, "mse": e.mse,
+                "light_optimum_degrees": e.light_optimum_degrees, "light_exact_degrees": e.light_exact_degrees, "light_exact_truth_degrees": e.light_exact_truth_degrees, "radius_ratio": e.radius_ratio, "mse": e.mse,
                 "truth_mse": e.truth_mse, "search_mse": e.search_mse, "seconds": e.seconds})).collect::<Vec<_>>(),
         });
         println!("{}", serde_json::to_string_pretty(&j).map_err(|e| Error::Invalid(e.to_string()))?);
@@ -332,6 +342,16 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
         "the network's own best light at the true camera (5-degree grid): median {:.1} deg from the truth, within 10 deg {:.0}%",
         median(&optimum),
         100.0 * within(&optimum, 10.0)
+    );
+    println!(
+        "light fitted to the exact renderer's maps of the grid at the recovered camera: median {:.1} deg, within 10 deg {:.0}%",
+        median(&exact),
+        100.0 * within(&exact, 10.0)
+    );
+    println!(
+        "the same at the true camera (what the image and grid allow): median {:.1} deg, within 10 deg {:.0}%",
+        median(&exact_truth),
+        100.0 * within(&exact_truth, 10.0)
     );
     println!(
         "cameras more than 10 deg off: {} of {}; {} of them the search's (the true camera scores a lower image MSE), {} the network's (the wrong view scores lower)",

@@ -36,6 +36,14 @@ pub struct InvertError {
     /// Angle between the true light and the network's own best light at the true camera
     /// ([`Inverter::light_optimum`]), degrees: what no light search could improve on.
     pub light_optimum_degrees: f64,
+    /// Angle between the true light and the best light for the exact renderer's own maps of
+    /// the grid at the recovered camera ([`Inverter::light_exact`]), degrees: the light the
+    /// shape-known inversion gets when it lets the ray marcher, not the network, draw the
+    /// maps the light is fitted to.
+    pub light_exact_degrees: f64,
+    /// The same at the true camera: what the image and grid allow, with no network and no
+    /// camera error in the way.
+    pub light_exact_truth_degrees: f64,
     /// Image MSE over the search window after the search's refinement started at the true
     /// camera and the network's best grid light there ([`Inverter::refined_mse`]).
     pub truth_mse: f64,
@@ -77,12 +85,16 @@ pub fn evaluate(
         let est = inv.invert(gpu, &s.grid, target, o, |_, _| {})?;
         let seconds = t.elapsed().as_secs_f64();
         let (optimum, _) = inv.light_optimum(gpu, &s.grid, target, &s.view)?;
+        let exact = inv.light_exact(gpu, &s.grid, target, &est.view)?;
+        let exact_truth = inv.light_exact(gpu, &s.grid, target, &s.view)?;
         let truth_mse = inv.refined_mse(gpu, &s.grid, target, &s.view, &optimum, o)?;
         out.push(InvertError {
             shape_id: s.shape_id,
             pose_degrees: angle_between(view_direction(&s.view), view_direction(&est.view)),
             light_degrees: angle_between(light_direction(&s.light), light_direction(&est.light)),
             light_optimum_degrees: angle_between(light_direction(&s.light), light_direction(&optimum)),
+            light_exact_degrees: angle_between(light_direction(&s.light), light_direction(&exact)),
+            light_exact_truth_degrees: angle_between(light_direction(&s.light), light_direction(&exact_truth)),
             truth_mse,
             search_mse: *est.curve.last().expect("at least one step"),
             radius_ratio: est.view.radius / s.view.radius,

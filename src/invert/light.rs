@@ -13,7 +13,7 @@ use crate::graph::Executor;
 use crate::nn::camera;
 use crate::nn::rendernet::{RenderNet, phong_of};
 use crate::ops::phong::Phong;
-use crate::reference::{Image, Light, View};
+use crate::reference::{Image, Light, Options, RayMarcher, Shader, View};
 use crate::voxel::VoxelGrid;
 
 /// One start's light-independent maps over the search window.
@@ -97,6 +97,32 @@ impl Inverter {
         let ranked = self.ranked_lights(gpu, &mut (net, ex), &gv, &t, &[start], &win, &light_grid(POLISH_STEP_DEGREES))?;
         let (sse, best) = ranked[0][0];
         Ok((best.light(&self.head_light), sse / t.len() as f64))
+    }
+
+    /// The light, among every direction of the 5-degree grid, under which the exact
+    /// renderer's own maps of `grid` seen from `view` (normal, albedo and mask from
+    /// [`RayMarcher`], shaded as the searches shade the network's maps) best match `target`
+    /// over the search window: what the grid and the image alone say about the light, with
+    /// no network in the way. Far from the true light, no network reading this grid could
+    /// find it either: a light behind the object leaves the camera only ambient and rims, and
+    /// the shading of a grid's stair-stepped normals misleads as the network's errors do.
+    pub fn light_exact(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, view: &View) -> Result<Light> {
+        let (win, _, t) = self.windowed(grid, target)?;
+        // Two sub-pixels per axis: the datasets' targets average at least that many.
+        let rm = RayMarcher::new(gpu).with_options(Options { supersample: 2, ..Options::default() });
+        let map = |sh| rm.render(gpu, grid, view, &self.head_light, sh, self.size as u32).map(|img| win.crop_rgb(&img));
+        let (normal, albedo, mask) = (map(Shader::Normal)?, map(Shader::Albedo)?, map(Shader::Mask)?);
+        let maps = Maps::of(&normal, &albedo, &mask, mask.len(), 0);
+        let ph = phong_of(&self.head_light);
+        let best = light_grid(POLISH_STEP_DEGREES)
+            .into_iter()
+            .map(|(azimuth, elevation)| {
+                let l = Light { azimuth, elevation, ..self.head_light };
+                (maps.sse(&ph, &camera::light_values(&l), &t), l)
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .expect("the light grid is not empty");
+        Ok(best.1)
     }
 
     /// Each of `starts` with each light of `lights` (azimuth, elevation), ranked by how well
@@ -197,6 +223,25 @@ mod tests {
         let best = ranked[1][0];
         assert!(best.0 < 1e-6 && (best.1.0[3], best.1.0[4]) == (140.0, 70.0), "best light {:?} with error {}", best.1, best.0);
         assert!(ranked[0][0].0 > 1.0, "another camera explains the image as well: {}", ranked[0][0].0);
+    }
+
+    /// Fitted to the exact renderer's own maps, the light that drew an exact Phong image of
+    /// the bunny (a 5-degree grid light from the front left, lighting what the camera sees)
+    /// comes back to within one grid step. Same renderer and sub-pixels on both sides, so the
+    /// only difference is averaging normals rather than shaded colours at the silhouette's
+    /// edge pixels.
+    #[test]
+    fn exact_light_of_an_exact_image_is_the_light_that_drew_it() {
+        let gpu = Gpu::new().unwrap();
+        let inv = Inverter::new(Preset::nano(), crate::nn::render::NANO_PHONG_WEIGHTS, "nano", Light::default()).unwrap();
+        let grid = crate::voxel::bunny();
+        let view = View { azimuth: 75.0, elevation: 60.0, radius: 3.5 };
+        let truth = Light { azimuth: 325.0, elevation: 72.5, ..Light::default() };
+        let rm = RayMarcher::new(&gpu).with_options(Options { supersample: 2, ..Options::default() });
+        let target = rm.render(&gpu, &grid, &view, &truth, Shader::Phong, inv.size as u32).unwrap();
+        let l = inv.light_exact(&gpu, &grid, &target, &view).unwrap();
+        let off = super::super::angle_between(super::super::light_direction(&truth), super::super::light_direction(&l));
+        assert!(off < 5.1, "exact light ({}, {}) is {off:.1} degrees from the truth", l.azimuth, l.elevation);
     }
 
     /// The network's own best light at the camera that drew its own image is the light that
