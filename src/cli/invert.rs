@@ -303,6 +303,10 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
     let optimum: Vec<f64> = errs.iter().map(|e| e.light_optimum_degrees).collect();
     let exact: Vec<f64> = errs.iter().map(|e| e.light_exact_degrees).collect();
     let exact_truth: Vec<f64> = errs.iter().map(|e| e.light_exact_truth_degrees).collect();
+    // Light errors split by where the true light is: in front of the object or behind it.
+    let side = |front: bool, f: fn(&invert::InvertError) -> f64| errs.iter().filter(|e| e.light_in_front == front).map(f).collect::<Vec<f64>>();
+    let (front, behind) = (side(true, |e| e.light_degrees), side(false, |e| e.light_degrees));
+    let (exact_front, exact_behind) = (side(true, |e| e.light_exact_truth_degrees), side(false, |e| e.light_exact_truth_degrees));
     let radius: Vec<f64> = errs.iter().map(|e| (e.radius_ratio - 1.0).abs()).collect();
     let within = |xs: &[f64], t: f64| xs.iter().filter(|&&x| x <= t).count() as f64 / xs.len().max(1) as f64;
     let secs = Interval::of(&errs.iter().map(|e| e.seconds).collect::<Vec<_>>());
@@ -320,12 +324,15 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
             "light_optimum_error_median_degrees": median(&optimum), "light_optimum_within_10_degrees": within(&optimum, 10.0),
             "light_exact_error_median_degrees": median(&exact), "light_exact_within_10_degrees": within(&exact, 10.0),
             "light_exact_truth_error_median_degrees": median(&exact_truth), "light_exact_truth_within_10_degrees": within(&exact_truth, 10.0),
+            "lights_in_front": front.len(),
+            "light_error_median_in_front_degrees": median(&front), "light_error_median_behind_degrees": median(&behind),
+            "light_exact_truth_error_median_in_front_degrees": median(&exact_front), "light_exact_truth_error_median_behind_degrees": median(&exact_behind),
             "radius_relative_error_median": median(&radius),
             "pose_off_by_10_degrees": off.len(), "pose_off_search_failures": search_failures,
             "seconds_per_image": secs.mean,
             "per_sample": errs.iter().map(|e| serde_json::json!({
                 "shape": e.shape_id, "pose_degrees": e.pose_degrees, "light_degrees": e.light_degrees,
-                "light_optimum_degrees": e.light_optimum_degrees, "light_exact_degrees": e.light_exact_degrees, "light_exact_truth_degrees": e.light_exact_truth_degrees, "radius_ratio": e.radius_ratio, "mse": e.mse,
+                "light_optimum_degrees": e.light_optimum_degrees, "light_exact_degrees": e.light_exact_degrees, "light_exact_truth_degrees": e.light_exact_truth_degrees, "light_in_front": e.light_in_front, "radius_ratio": e.radius_ratio, "mse": e.mse,
                 "truth_mse": e.truth_mse, "search_mse": e.search_mse, "seconds": e.seconds})).collect::<Vec<_>>(),
         });
         println!("{}", serde_json::to_string_pretty(&j).map_err(|e| Error::Invalid(e.to_string()))?);
@@ -352,6 +359,15 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
         "the same at the true camera (what the image and grid allow): median {:.1} deg, within 10 deg {:.0}%",
         median(&exact_truth),
         100.0 * within(&exact_truth, 10.0)
+    );
+    println!(
+        "lights on the camera's side: {} of {}; light error median {:.1} deg there, {:.1} behind the object (exact maps at the true camera: {:.1} and {:.1})",
+        front.len(),
+        errs.len(),
+        median(&front),
+        median(&behind),
+        median(&exact_front),
+        median(&exact_behind)
     );
     println!(
         "cameras more than 10 deg off: {} of {}; {} of them the search's (the true camera scores a lower image MSE), {} the network's (the wrong view scores lower)",

@@ -36,6 +36,10 @@ pub struct InvertError {
     /// Angle between the true light and the network's own best light at the true camera
     /// ([`Inverter::light_optimum`]), degrees: what no light search could improve on.
     pub light_optimum_degrees: f64,
+    /// Whether the true light is on the camera's side of the object (its direction has a
+    /// component towards the camera). A light behind lights only rims the camera sees, so
+    /// its direction is far less determined by the image.
+    pub light_in_front: bool,
     /// Angle between the true light and the best light for the exact renderer's own maps of
     /// the grid at the recovered camera ([`Inverter::light_exact`]), degrees: the light the
     /// shape-known inversion gets when it lets the ray marcher, not the network, draw the
@@ -93,6 +97,7 @@ pub fn evaluate(
             pose_degrees: angle_between(view_direction(&s.view), view_direction(&est.view)),
             light_degrees: angle_between(light_direction(&s.light), light_direction(&est.light)),
             light_optimum_degrees: angle_between(light_direction(&s.light), light_direction(&optimum)),
+            light_in_front: light_direction(&s.light)[2] > 0.0,
             light_exact_degrees: angle_between(light_direction(&s.light), light_direction(&exact)),
             light_exact_truth_degrees: angle_between(light_direction(&s.light), light_direction(&exact_truth)),
             truth_mse,
