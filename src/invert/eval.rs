@@ -92,14 +92,16 @@ pub fn evaluate(
         let exact = inv.light_exact(gpu, &s.grid, target, &est.view)?;
         let exact_truth = inv.light_exact(gpu, &s.grid, target, &s.view)?;
         let truth_mse = inv.refined_mse(gpu, &s.grid, target, &s.view, &optimum, o)?;
+        let true_light = light_direction(&s.light);
+        let light_off = |l: &Light| angle_between(true_light, light_direction(l));
         out.push(InvertError {
             shape_id: s.shape_id,
             pose_degrees: angle_between(view_direction(&s.view), view_direction(&est.view)),
-            light_degrees: angle_between(light_direction(&s.light), light_direction(&est.light)),
-            light_optimum_degrees: angle_between(light_direction(&s.light), light_direction(&optimum)),
-            light_in_front: light_direction(&s.light)[2] > 0.0,
-            light_exact_degrees: angle_between(light_direction(&s.light), light_direction(&exact)),
-            light_exact_truth_degrees: angle_between(light_direction(&s.light), light_direction(&exact_truth)),
+            light_degrees: light_off(&est.light),
+            light_optimum_degrees: light_off(&optimum),
+            light_in_front: true_light[2] > 0.0,
+            light_exact_degrees: light_off(&exact),
+            light_exact_truth_degrees: light_off(&exact_truth),
             truth_mse,
             search_mse: *est.curve.last().expect("at least one step"),
             radius_ratio: est.view.radius / s.view.radius,

@@ -107,11 +107,11 @@ impl Inverter {
     /// find it either: a light behind the object leaves the camera only ambient and rims, and
     /// the shading of a grid's stair-stepped normals misleads as the network's errors do.
     pub fn light_exact(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, view: &View) -> Result<Light> {
-        let (win, _, t) = self.windowed(grid, target)?;
+        let (win, t) = self.window(target)?;
         // Two sub-pixels per axis: the datasets' targets average at least that many.
         let rm = RayMarcher::new(gpu).with_options(Options { supersample: 2, ..Options::default() });
-        let map = |sh| rm.render(gpu, grid, view, &self.head_light, sh, self.size as u32).map(|img| win.crop_rgb(&img));
-        let (normal, albedo, mask) = (map(Shader::Normal)?, map(Shader::Albedo)?, map(Shader::Mask)?);
+        let drawn = rm.render_many(gpu, grid, view, &self.head_light, &[Shader::Normal, Shader::Albedo, Shader::Mask], self.size as u32)?;
+        let [normal, albedo, mask] = [0, 1, 2].map(|k| win.crop_rgb(&drawn[k]));
         let maps = Maps::of(&normal, &albedo, &mask, mask.len(), 0);
         let ph = phong_of(&self.head_light);
         let best = light_grid(POLISH_STEP_DEGREES)

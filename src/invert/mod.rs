@@ -335,9 +335,15 @@ impl Inverter {
     /// What a search of one image renders: the window around `target`'s foreground, the
     /// network's input values of `grid` and the target's pixels inside the window.
     fn windowed(&self, grid: &VoxelGrid, target: &Image) -> Result<(Window, Vec<f32>, Vec<f32>)> {
+        let (win, t) = self.window(target)?;
+        Ok((win, self.grid_values(grid)?, t))
+    }
+
+    /// The window around `target`'s foreground and the target's pixels inside it.
+    fn window(&self, target: &Image) -> Result<(Window, Vec<f32>)> {
         let win = Window::around(&self.preset, &self.foreground(target)?, self.size);
         let t = win.crop_rgb(target);
-        Ok((win, self.grid_values(grid)?, t))
+        Ok((win, t))
     }
 
     fn grid_values(&self, grid: &VoxelGrid) -> Result<Vec<f32>> {

@@ -237,13 +237,20 @@ impl RayMarcher {
     /// Renders `grid` as `size x size` pixels: uploads it, records both passes into one
     /// submit and reads the image back.
     pub fn render(&self, gpu: &Gpu, grid: &VoxelGrid, view: &View, light: &Light, shader: Shader, size: u32) -> Result<Image> {
+        Ok(self.render_many(gpu, grid, view, light, &[shader], size)?.remove(0))
+    }
+
+    /// Like [`RayMarcher::render`] for several shaders of one view: one upload, one march
+    /// ([`RayMarcher::record_many`]) and one submit; the images in the order of `shaders`.
+    pub fn render_many(&self, gpu: &Gpu, grid: &VoxelGrid, view: &View, light: &Light, shaders: &[Shader], size: u32) -> Result<Vec<Image>> {
         if size == 0 {
             return Err(Error::Invalid("reference::render: image size must be at least 1".into()));
         }
         let g = GpuGrid::upload(gpu, grid)?;
-        let out = Tensor::zeros(gpu, &[shader.channels(), size as usize, size as usize])?;
-        gpu.run(|pass| self.record(gpu, pass, &g, view, light, shader, &out))?;
-        Ok(Image { channels: shader.channels(), size: size as usize, data: out.to_vec(gpu)? })
+        let outs: Vec<Tensor> = shaders.iter().map(|s| Tensor::zeros(gpu, &[s.channels(), size as usize, size as usize])).collect::<Result<_>>()?;
+        let pairs: Vec<(Shader, &Tensor)> = shaders.iter().copied().zip(&outs).collect();
+        gpu.run(|pass| self.record_many(gpu, pass, &g, view, light, &pairs))?;
+        shaders.iter().zip(&outs).map(|(s, out)| Ok(Image { channels: s.channels(), size: size as usize, data: out.to_vec(gpu)? })).collect()
     }
 
     /// Records a render into `pass`, writing `out` (`[C, S, S]`, `C` = [`Shader::channels`]),
