@@ -53,17 +53,20 @@ fn elu_forward_and_backward() {
 
 #[test]
 fn sum_outer_inner_matches_reference() {
-    // [A, B, C] = [3, 5, 131]: C not a multiple of the 64-wide workgroup.
-    let (a, b, c) = (3, 5, 131);
-    let mut rng = Rng(3);
-    let x = f32_round(&rng.vec(a * b * c, -1.0, 1.0));
-    let want: Vec<f64> = (0..b)
-        .map(|j| (0..a).flat_map(|i| (0..c).map(move |k| (i, k))).map(|(i, k)| x[(i * b + j) * c + k]).sum::<f64>() * 0.5)
-        .collect();
-    let (tx, tout) = (upload(&[a, b, c], &x), zeros(&[b]));
-    run(|p| reduce::sum_outer_inner(gpu(), p, &tx, [a, b, c], 0.5, &tout));
-    // 393 terms of size <= 1: f32 sum error << 1e-5.
-    assert_close("sum_outer_inner", &download(&tout), &want, 1e-5, 1e-5);
+    // C = 131: not a multiple of the 64-wide workgroup (the scalar entry point). C = 324: a
+    // multiple of 4 and >= 256 (the vec4 one), 81 quads, so lanes 17..63 make a second round
+    // past the end; B = 5 rows interleave with A = 3 so a wrong row stride shows.
+    for (a, b, c) in [(3, 5, 131), (3, 5, 324)] {
+        let mut rng = Rng(3);
+        let x = f32_round(&rng.vec(a * b * c, -1.0, 1.0));
+        let want: Vec<f64> = (0..b)
+            .map(|j| (0..a).flat_map(|i| (0..c).map(move |k| (i, k))).map(|(i, k)| x[(i * b + j) * c + k]).sum::<f64>() * 0.5)
+            .collect();
+        let (tx, tout) = (upload(&[a, b, c], &x), zeros(&[b]));
+        run(|p| reduce::sum_outer_inner(gpu(), p, &tx, [a, b, c], 0.5, &tout));
+        // <= 972 terms of size <= 1: f32 sum error << 1e-5.
+        assert_close(&format!("sum_outer_inner {a}x{b}x{c}"), &download(&tout), &want, 1e-5, 1e-5);
+    }
 }
 
 #[test]

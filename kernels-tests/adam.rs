@@ -7,10 +7,8 @@ use common::*;
 use reference::adam::{Hyper, step};
 use rendernet::ops::adam::Adam;
 
-/// Six steps of `adam` on a fresh state, checking parameter, m and v after each.
-fn six_steps(adam: Adam, seed: u64) {
-    // Odd, non-power-of-two parameter shape (a conv weight), more than one workgroup.
-    let shape = [5, 3, 3, 7];
+/// Six steps of `adam` on a fresh state of `shape`, checking parameter, m and v after each.
+fn six_steps(adam: Adam, seed: u64, shape: [usize; 4]) {
     let n: usize = shape.iter().product();
     let mut rng = Rng(seed);
     let h = Hyper { lr: adam.lr as f64, beta1: adam.beta1 as f64, beta2: adam.beta2 as f64, eps: adam.eps as f64 };
@@ -34,13 +32,23 @@ fn six_steps(adam: Adam, seed: u64) {
 
 #[test]
 fn several_steps_match_the_reference() {
-    six_steps(Adam { lr: 0.01, ..Adam::new(0.0) }, 31);
+    // Odd, non-power-of-two parameter shape (a conv weight), more than one workgroup: the
+    // scalar entry point.
+    six_steps(Adam { lr: 0.01, ..Adam::new(0.0) }, 31, [5, 3, 3, 7]);
+}
+
+#[test]
+fn several_steps_of_four_parameters_per_invocation_match_the_reference() {
+    // 504 values, a multiple of 4 (the vec4 entry point), 126 invocations: two workgroups,
+    // the second partly past the end.
+    six_steps(Adam { lr: 0.01, ..Adam::new(0.0) }, 33, [8, 3, 3, 7]);
 }
 
 #[test]
 fn several_steps_with_other_betas_match_the_reference() {
     // The original's beta1 = 0.5 makes beta1 and 1 - beta1 equal, which would hide a swap.
-    six_steps(Adam { lr: 0.01, beta1: 0.8, beta2: 0.95, eps: 1e-8 }, 32);
+    six_steps(Adam { lr: 0.01, beta1: 0.8, beta2: 0.95, eps: 1e-8 }, 32, [5, 3, 3, 7]);
+    six_steps(Adam { lr: 0.01, beta1: 0.8, beta2: 0.95, eps: 1e-8 }, 34, [4, 1, 1, 3]);
 }
 
 #[test]

@@ -8,7 +8,14 @@ use rendernet::ops::{adam::Adam, finite};
 
 #[test]
 fn flags_nan_and_inf_and_nothing_else() {
-    let n = 131; // not a multiple of the 64-wide workgroup
+    // 131: not a multiple of the 64-wide workgroup (the scalar entry point); 260: four values
+    // a load (the vec4 one), its last quad in a second round of the workgroup's loop.
+    for n in [131, 260] {
+        flags_nan_and_inf_in(n);
+    }
+}
+
+fn flags_nan_and_inf_in(n: usize) {
     let mut rng = Rng(9);
     let clean: Vec<f32> = rng.vec(n, -1e30, 1e30).iter().map(|&v| v as f32).collect();
     let mut with_nan = clean.clone();
@@ -48,16 +55,18 @@ fn flags_nan_and_inf_and_nothing_else() {
 
 #[test]
 fn guarded_adam_skips_a_poisoned_step() {
-    let n = 7;
-    let (param, grad) = (upload(&[n], &[0.5; 7]), upload(&[n], &[0.25; 7]));
-    let (m, v) = (zeros(&[n]), zeros(&[n]));
-    let guard = upload(&[1], &[1.0]);
-    let adam = Adam::new(0.1);
-    run(|p| adam.step_guarded(gpu(), p, 1, &param, &grad, &m, &v, Some(&guard)));
-    assert_eq!(download(&param), [0.5; 7], "set guard: parameters untouched");
-    assert_eq!(download(&m), [0.0; 7], "set guard: moments untouched");
-    guard.write(gpu(), &[0.0]).unwrap();
-    run(|p| adam.step_guarded(gpu(), p, 1, &param, &grad, &m, &v, Some(&guard)));
-    // The first Adam step moves every parameter by exactly lr (bias-corrected m / sqrt(v) = 1).
-    assert_close("clear guard: a normal step", &download(&param), &[0.4; 7], 1e-6, 1e-5);
+    // 7 values run the scalar entry point, 8 the vec4 one; each reads the guard.
+    for n in [7, 8] {
+        let (param, grad) = (upload(&[n], &vec![0.5; n]), upload(&[n], &vec![0.25; n]));
+        let (m, v) = (zeros(&[n]), zeros(&[n]));
+        let guard = upload(&[1], &[1.0]);
+        let adam = Adam::new(0.1);
+        run(|p| adam.step_guarded(gpu(), p, 1, &param, &grad, &m, &v, Some(&guard)));
+        assert_eq!(download(&param), vec![0.5; n], "n {n}, set guard: parameters untouched");
+        assert_eq!(download(&m), vec![0.0; n], "n {n}, set guard: moments untouched");
+        guard.write(gpu(), &[0.0]).unwrap();
+        run(|p| adam.step_guarded(gpu(), p, 1, &param, &grad, &m, &v, Some(&guard)));
+        // The first Adam step moves every parameter by exactly lr (bias-corrected m / sqrt(v) = 1).
+        assert_close(&format!("n {n}, clear guard: a normal step"), &download(&param), &vec![0.4; n], 1e-6, 1e-5);
+    }
 }

@@ -445,8 +445,11 @@ fn profiled_runs_time_every_op_in_schedule_order() {
     assert_eq!(names, forward);
     let kinds: Vec<&str> = ex.op_times().iter().map(|t| t.kind.as_str()).collect();
     assert_eq!(kinds, net.graph.nodes().iter().map(|n| n.op.name()).collect::<Vec<_>>());
-    ex.train_step(&gpu, net.loss.unwrap(), &Adam::new(1e-3)).unwrap();
+    let stats = ex.train_step(&gpu, net.loss.unwrap(), &Adam::new(1e-3)).unwrap();
     let t = ex.op_times();
+    // Every dispatch of the step is counted against one op, and every op dispatches.
+    assert_eq!(t.iter().map(|t| t.dispatches).sum::<u64>(), stats.dispatches, "{t:?}");
+    assert!(t.iter().all(|t| t.dispatches > 0), "{t:?}");
     assert!(t.iter().all(|t| t.ns.is_finite() && t.ns >= 0.0), "{t:?}");
     assert_eq!(t[..forward.len()].iter().map(|t| t.name.clone()).collect::<Vec<_>>(), forward);
     let backward: Vec<&str> = t[forward.len()..t.len() - 1].iter().map(|t| t.name.as_str()).collect();
@@ -457,6 +460,7 @@ fn profiled_runs_time_every_op_in_schedule_order() {
     let total: f64 = t.iter().map(|t| t.ns).sum();
     let kinds = by_kind(t);
     assert_eq!(kinds.iter().map(|k| k.2).sum::<usize>(), t.len());
+    assert_eq!(kinds.iter().map(|k| k.3).sum::<u64>(), stats.dispatches);
     assert!((kinds.iter().map(|k| k.1).sum::<f64>() - total).abs() <= 1e-6 * total.max(1.0));
     assert!(kinds.windows(2).all(|w| w[0].1 >= w[1].1), "kinds not sorted slowest first");
     ex.profile(&gpu, false).unwrap();

@@ -244,25 +244,25 @@ fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine, profile: bool) -> Result<Ve
     Ok(rows)
 }
 
-/// The ops of one profiled run, slowest first, as JSON: `{name, kind, ms}`.
+/// The ops of one profiled run, slowest first, as JSON: `{name, kind, ms, dispatches}`.
 fn profile_json(times: &[OpTime]) -> serde_json::Value {
     let mut v: Vec<&OpTime> = times.iter().collect();
     v.sort_by(|a, b| b.ns.total_cmp(&a.ns));
-    v.iter().map(|t| serde_json::json!({"name": t.name, "kind": t.kind, "ms": t.ns * 1e-6})).collect()
+    v.iter().map(|t| serde_json::json!({"name": t.name, "kind": t.kind, "ms": t.ns * 1e-6, "dispatches": t.dispatches})).collect()
 }
 
 /// Time per op kind and the 10 slowest ops of one profiled run whose wall time was `wall_ms`.
 fn profile_text(times: &[OpTime], wall_ms: f64) -> String {
     let total: f64 = times.iter().map(|t| t.ns).sum::<f64>() * 1e-6;
     let mut s = format!("  profile: {total:.1} ms on the GPU between the first and last op ({wall_ms:.1} ms wall, median)\n");
-    for (kind, ns, count) in by_kind(times) {
-        s += &format!("    {kind:<16} {:>8.2} ms {:>5.1}%  ({count} steps)\n", ns * 1e-6, 100.0 * ns * 1e-6 / total.max(1e-9));
+    for (kind, ns, count, dispatches) in by_kind(times) {
+        s += &format!("    {kind:<16} {:>8.2} ms {:>5.1}%  ({count} steps, {dispatches} dispatches)\n", ns * 1e-6, 100.0 * ns * 1e-6 / total.max(1e-9));
     }
     let mut v: Vec<&OpTime> = times.iter().collect();
     v.sort_by(|a, b| b.ns.total_cmp(&a.ns));
     s += "    slowest:\n";
     for t in v.iter().take(10) {
-        s += &format!("      {:<36} {:>8.2} ms\n", t.name, t.ns * 1e-6);
+        s += &format!("      {:<36} {:>8.2} ms  ({} dispatches)\n", t.name, t.ns * 1e-6, t.dispatches);
     }
     s.trim_end().to_string()
 }

@@ -358,13 +358,13 @@ impl Executor {
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
             if let Some(p) = &mut self.profiler {
-                p.begin(&mut pass);
+                p.begin(gpu, &mut pass);
             }
             tensor_bytes = self.record(gpu, &mut pass, nodes, bw, loss, last, last_grad)?;
             if let Some(adam) = adam {
                 self.record_adam(gpu, &mut pass, adam)?;
                 if let Some(p) = &mut self.profiler {
-                    p.mark(&mut pass, "adam".into(), "adam");
+                    p.mark(gpu, &mut pass, "adam".into(), "adam");
                 }
             }
         }
@@ -472,7 +472,7 @@ impl Executor {
             }
             crate::gpu::op_done();
             if let Some(p) = &mut self.profiler {
-                p.mark(pass, format!("{} forward", n.name), n.op.name());
+                p.mark(gpu, pass, format!("{} forward", n.name), n.op.name());
             }
             self.values[n.output.0] = Some(y);
             for v in n.inputs.iter().chain([&n.output]) {
@@ -541,7 +541,7 @@ impl Executor {
             }
             crate::gpu::op_done();
             if let Some(p) = &mut self.profiler {
-                p.mark(pass, format!("{} backward", n.name), n.op.name());
+                p.mark(gpu, pass, format!("{} backward", n.name), n.op.name());
             }
             if last_grad[n.output.0] == pos && !self.grad_wanted[n.output.0] {
                 if let Some(t) = self.grads[n.output.0].take() {

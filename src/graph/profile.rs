@@ -17,6 +17,9 @@ pub struct OpTime {
     pub kind: String,
     /// Nanoseconds between the timestamp before it and the one after it.
     pub ns: f64,
+    /// Dispatches it recorded: on lavapipe each costs tens of microseconds of thread
+    /// wake-ups whatever it computes (see README "Benchmarks").
+    pub dispatches: u64,
 }
 
 /// The query set and buffers of one executor's profiled runs.
@@ -25,8 +28,10 @@ pub(crate) struct Profiler {
     cap: u32,
     resolve: wgpu::Buffer,
     staging: wgpu::Buffer,
-    /// (name, kind) of the op that ends at each timestamp after the first.
-    marks: Vec<(String, String)>,
+    /// (name, kind, dispatches) of the op that ends at each timestamp after the first.
+    marks: Vec<(String, String, u64)>,
+    /// The device's dispatch count at the last timestamp.
+    dispatched: u64,
 }
 
 /// wgpu's limit on the queries of one set.
@@ -46,21 +51,24 @@ impl Profiler {
         let size = cap as u64 * 8;
         let resolve = gpu.new_buffer("profile resolve", size, wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
         let staging = gpu.new_buffer("profile readback", size, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
-        Ok(Profiler { set, cap, resolve, staging, marks: Vec::new() })
+        Ok(Profiler { set, cap, resolve, staging, marks: Vec::new(), dispatched: 0 })
     }
 
     /// The first timestamp of a run.
-    pub(crate) fn begin(&mut self, pass: &mut wgpu::ComputePass<'_>) {
+    pub(crate) fn begin(&mut self, gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>) {
         self.marks.clear();
+        self.dispatched = gpu.dispatch_count();
         pass.write_timestamp(&self.set, 0);
     }
 
     /// A timestamp after the op just recorded; ops past the set's capacity are not timed.
-    pub(crate) fn mark(&mut self, pass: &mut wgpu::ComputePass<'_>, name: String, kind: &str) {
+    pub(crate) fn mark(&mut self, gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, name: String, kind: &str) {
         let i = self.marks.len() as u32 + 1;
         if i < self.cap {
             pass.write_timestamp(&self.set, i);
-            self.marks.push((name, kind.to_string()));
+            let now = gpu.dispatch_count();
+            self.marks.push((name, kind.to_string(), now - self.dispatched));
+            self.dispatched = now;
         }
     }
 
@@ -81,21 +89,27 @@ impl Profiler {
             .marks
             .iter()
             .enumerate()
-            .map(|(i, (name, kind))| OpTime { name: name.clone(), kind: kind.clone(), ns: tick(i + 1).saturating_sub(tick(i)) as f64 * period })
+            .map(|(i, (name, kind, dispatches))| OpTime {
+                name: name.clone(),
+                kind: kind.clone(),
+                ns: tick(i + 1).saturating_sub(tick(i)) as f64 * period,
+                dispatches: *dispatches,
+            })
             .collect())
     }
 }
 
-/// `times` summed per kind, largest first, with each kind's number of steps.
-pub fn by_kind(times: &[OpTime]) -> Vec<(String, f64, usize)> {
-    let mut sums: Vec<(String, f64, usize)> = Vec::new();
+/// `times` summed per kind, largest first, with each kind's number of steps and dispatches.
+pub fn by_kind(times: &[OpTime]) -> Vec<(String, f64, usize, u64)> {
+    let mut sums: Vec<(String, f64, usize, u64)> = Vec::new();
     for t in times {
         match sums.iter_mut().find(|s| s.0 == t.kind) {
             Some(s) => {
                 s.1 += t.ns;
                 s.2 += 1;
+                s.3 += t.dispatches;
             }
-            None => sums.push((t.kind.clone(), t.ns, 1)),
+            None => sums.push((t.kind.clone(), t.ns, 1, t.dispatches)),
         }
     }
     sums.sort_by(|a, b| b.1.total_cmp(&a.1));

@@ -19,8 +19,10 @@ pub fn check(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, flags: &Te
     if slot == 0 || slot >= flags.numel() {
         return Err(shape_err("finite_check", format!("slot {slot} outside 1..{} of flags {:?}", flags.numel(), flags.shape())));
     }
-    let p = Params { n: x.numel() as u32, slot: slot as u32 };
-    gpu.dispatch(pass, SHADER, "finite_check", &p, &[Arg::R(x), Arg::W(flags)], [1, 1, 1])
+    let n = x.numel();
+    let p = Params { n: n as u32, slot: slot as u32 };
+    let entry = if n.is_multiple_of(4) { "finite_check_vec4" } else { "finite_check" };
+    gpu.dispatch(pass, SHADER, entry, &p, &[Arg::R(x), Arg::W(flags)], [1, 1, 1])
 }
 
 /// `flags[0] = 1` if any of `flags[1..=count]` is set, else 0.

@@ -35,5 +35,8 @@ pub fn sum_outer_inner(
     let params = Params { a: a as u32, b: b as u32, c: c as u32, scale };
     // One workgroup per output value: grid_1d with a workgroup size of 1 counts groups.
     let wg = grid_1d(b as u64, 1)?;
-    gpu.dispatch(pass, SHADER, "sum_outer_inner", &params, &[Arg::R(x), Arg::W(out)], wg)
+    // Four values a load where every run along C splits into whole vec4s and is long enough
+    // to keep the 64 invocations busy (a loss mean, a bias or PReLU gradient over space).
+    let entry = if c.is_multiple_of(4) && c >= 256 { "sum_outer_inner_vec4" } else { "sum_outer_inner" };
+    gpu.dispatch(pass, SHADER, entry, &params, &[Arg::R(x), Arg::W(out)], wg)
 }
