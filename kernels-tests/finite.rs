@@ -70,3 +70,29 @@ fn guarded_adam_skips_a_poisoned_step() {
         assert_close(&format!("n {n}, clear guard: a normal step"), &download(&param), &vec![0.4; n], 1e-6, 1e-5);
     }
 }
+
+#[test]
+fn chunked_check_flags_exactly_the_chunks_holding_nan_or_inf() {
+    // 1004 values = 251 quads in 7 chunks of 36 quads (the last holds 35): an Inf in the
+    // first quad of chunk 3, a NaN in the very last value (chunk 6); chunk 2 ends one quad
+    // before the Inf, so an off-by-one in the chunk bounds flags it too.
+    let n = 1004;
+    let mut v: Vec<f32> = Rng(5).vec(n, -1e30, 1e30).iter().map(|&x| x as f32).collect();
+    v[4 * 36 * 3 + 2] = f32::INFINITY;
+    v[n - 1] = f32::NAN;
+    let g = gpu();
+    let x = rendernet::Tensor::from_slice(g, &[n], &v).unwrap();
+    let flags = zeros(&[9]);
+    let chunks = g.run(|p| {
+        let c = finite::check_chunks(g, p, &x, &flags, 7)?;
+        finite::any(g, p, &flags, c)?;
+        Ok(c)
+    }).unwrap();
+    assert_eq!(chunks, 7);
+    assert_eq!(download(&flags), [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0]);
+    let odd = zeros(&[6]);
+    let err = g.run(|p| finite::check_chunks(g, p, &odd, &flags, 2)).unwrap_err().to_string();
+    assert!(err.contains("multiple of 4"), "{err}");
+    let err = g.run(|p| finite::check_chunks(g, p, &x, &flags, 9)).unwrap_err().to_string();
+    assert!(err.contains("chunks"), "{err}");
+}

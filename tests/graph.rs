@@ -319,3 +319,27 @@ fn a_step_with_nan_or_inf_gradients_is_refused_and_changes_nothing() {
     assert_eq!(before, after);
     assert_eq!(ex.step, 1, "a refused step does not count");
 }
+
+#[test]
+fn a_training_step_updates_every_parameter_at_once_by_adams_first_step() {
+    // The optimizer runs over the flat parameter, gradient and moment buffers: a gradient
+    // check, its summary and one Adam update, three dispatches whatever the parameter count.
+    // Adam's first step moves each parameter by lr against its gradient's sign (bias-corrected
+    // m / sqrt(v) = +-1); act.alpha's 3 values leave a padding gap before the next view, so a
+    // misplaced view or update shows.
+    let (n, mut ex, _, _) = fed(3);
+    let bw = ex.backward(gpu(), n.loss).unwrap();
+    let params = [n.alpha, n.w, n.b];
+    let before: Vec<Vec<f64>> = params.iter().map(|&v| read64(&ex, v)).collect();
+    let grads: Vec<Vec<f64>> = params.iter().map(|&v| grad64(&ex, v)).collect();
+    let lr = 1e-3;
+    let step = ex.train_step(gpu(), n.loss, &Adam::new(lr as f32)).unwrap();
+    assert_eq!(step.dispatches, bw.dispatches + 3, "backward {bw:?}, step {step:?}");
+    for (k, &v) in params.iter().enumerate() {
+        let sign = |g: f64| if g == 0.0 { 0.0 } else { g.signum() };
+        let want: Vec<f64> = before[k].iter().zip(&grads[k]).map(|(p, &g)| p - lr * sign(g)).collect();
+        assert_close(&format!("parameter {k} after one step"), &read64(&ex, v), &want, 1e-6, 1e-5);
+        // The step's own gradients are the same as the backward run's (same inputs).
+        assert_close(&format!("gradient {k}"), &grad64(&ex, v), &grads[k], 1e-6, 1e-5);
+    }
+}

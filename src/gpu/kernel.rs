@@ -195,7 +195,7 @@ impl Gpu {
         let mut entries = vec![wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::Buffer(uniform) }];
         for (i, a) in args.iter().enumerate() {
             let resource = match a {
-                Arg::R(t) | Arg::W(t) => t.buffer().as_entire_binding(),
+                Arg::R(t) | Arg::W(t) => t.binding(),
                 Arg::Absent => self.dummy.as_entire_binding(),
                 Arg::Texture(v, _) | Arg::StorageTexture(v, _) | Arg::ReadStorageTexture(v, _) => wgpu::BindingResource::TextureView(v),
             };

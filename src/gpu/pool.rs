@@ -91,7 +91,11 @@ impl BufferPool {
     }
 
     /// Returns a tensor's buffer for reuse (see the module note on when that is safe).
+    /// A view ([`Tensor::view`]) shares its buffer with other tensors and is never pooled.
     pub fn release(&mut self, t: Tensor) {
+        if t.is_view() {
+            return;
+        }
         let size = t.buffer().size();
         self.reuse.put(size, t.into_buffer());
     }

@@ -4,11 +4,16 @@ use super::Gpu;
 use crate::error::{Error, Result};
 use std::sync::Arc;
 
-/// A shape-checked f32 tensor living in a GPU buffer. Cloning shares the buffer.
+/// A shape-checked f32 tensor living in a GPU buffer, or in a range of one shared with
+/// other tensors (a [`Tensor::view`]). Cloning shares the buffer.
 #[derive(Clone)]
 pub struct Tensor {
     buffer: Arc<wgpu::Buffer>,
     shape: Vec<usize>,
+    /// Where the tensor starts in `buffer`, in bytes (0 unless a view).
+    offset: u64,
+    /// Whether it is a view: bound as its own range rather than the whole buffer.
+    view: bool,
 }
 
 impl std::fmt::Debug for Tensor {
@@ -29,7 +34,7 @@ impl Tensor {
             usage: Self::usage(),
             mapped_at_creation: false,
         });
-        Ok(Tensor { buffer: Arc::new(buffer), shape: shape.to_vec() })
+        Ok(Tensor { buffer: Arc::new(buffer), shape: shape.to_vec(), offset: 0, view: false })
     }
 
     /// Uploads `data` as a tensor of `shape`; the element counts must agree.
@@ -56,7 +61,7 @@ impl Tensor {
             .map_err(|e| Error::Device(format!("mapping a new buffer failed: {e}")))?
             .copy_from_slice(bytemuck::cast_slice(data));
         buffer.unmap();
-        Ok(Tensor { buffer: Arc::new(buffer), shape: shape.to_vec() })
+        Ok(Tensor { buffer: Arc::new(buffer), shape: shape.to_vec(), offset: 0, view: false })
     }
 
     /// Wraps an existing storage buffer (e.g. from a [`super::BufferPool`]) of at least
@@ -69,7 +74,41 @@ impl Tensor {
                 buffer.size()
             )));
         }
-        Ok(Tensor { buffer, shape: shape.to_vec() })
+        Ok(Tensor { buffer, shape: shape.to_vec(), offset: 0, view: false })
+    }
+
+    /// A tensor of `shape` at byte `offset` of `buffer`, which other tensors may share (the
+    /// executor keeps all parameters, all their gradients and each Adam moment in one buffer
+    /// apiece, so the optimizer updates them in one dispatch). `offset` must be a multiple of
+    /// the device's storage offset alignment.
+    pub fn view(buffer: Arc<wgpu::Buffer>, offset: u64, shape: &[usize]) -> Result<Tensor> {
+        let need = shape.iter().product::<usize>() as u64 * 4;
+        if shape.is_empty() || need == 0 || offset.checked_add(need).is_none_or(|end| end > buffer.size()) {
+            return Err(Error::Invalid(format!(
+                "a buffer of {} bytes cannot hold a tensor of shape {shape:?} at byte {offset}",
+                buffer.size()
+            )));
+        }
+        Ok(Tensor { buffer, shape: shape.to_vec(), offset, view: true })
+    }
+
+    /// Whether this tensor is a range of a buffer shared with others ([`Tensor::view`]).
+    pub fn is_view(&self) -> bool {
+        self.view
+    }
+
+    /// How a dispatch binds it: the whole buffer, or a view's own range.
+    pub(crate) fn binding(&self) -> wgpu::BindingResource<'_> {
+        if !self.view {
+            return self.buffer.as_entire_binding();
+        }
+        let size = std::num::NonZeroU64::new(self.numel() as u64 * 4);
+        wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer: &self.buffer, offset: self.offset, size })
+    }
+
+    /// Where it starts in its buffer, in bytes.
+    pub fn offset(&self) -> u64 {
+        self.offset
     }
 
     /// Overwrites the tensor's contents (queued; takes effect at the next submit, before
@@ -83,7 +122,7 @@ impl Tensor {
                 self.numel()
             )));
         }
-        gpu.queue.write_buffer(&self.buffer, 0, bytemuck::cast_slice(data));
+        gpu.queue.write_buffer(&self.buffer, self.offset, bytemuck::cast_slice(data));
         Ok(())
     }
 
@@ -98,7 +137,7 @@ impl Tensor {
             mapped_at_creation: false,
         });
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(&self.buffer, 0, &staging, 0, bytes);
+        enc.copy_buffer_to_buffer(&self.buffer, self.offset, &staging, 0, bytes);
         gpu.submit_and_wait(enc)?;
         read_staging(gpu, &staging)
     }

@@ -10,6 +10,7 @@
 
 use super::op::Ctx;
 use super::{Graph, Kind, Value};
+use super::flat::Flat;
 use super::profile::{OpTime, Profiler};
 use crate::error::{Error, Result};
 use crate::gpu::{BufferPool, Gpu, Memo, Tensor};
@@ -52,6 +53,11 @@ pub struct Executor {
     pub step: u64,
     pub(crate) seed: u64,
     pub(crate) adam_state: Vec<Option<(Tensor, Tensor)>>,
+    /// Parameters, their gradients and Adam moments, each kind in one buffer.
+    pub(crate) flat: Flat,
+    /// Whether the last training step checked every gradient at once (its guard flags are
+    /// then per chunk of the flat gradients, not per parameter).
+    guard_flat: bool,
     loss_one: Option<Tensor>,
     /// Gradient guard flags `[1 + params]` and the buffer they are copied to for reading.
     guard: Option<(Tensor, wgpu::Buffer)>,
@@ -72,6 +78,10 @@ pub struct Executor {
     pub notes: std::collections::HashMap<String, String>,
 }
 
+/// Workgroups of the gradient check over the flat buffer: enough to spread it over the CPU
+/// threads of lavapipe, few enough that each has a long loop.
+const FLAT_CHUNKS: usize = 64;
+
 fn bytes(shape: &[usize]) -> u64 {
     shape.iter().product::<usize>() as u64 * 4
 }
@@ -83,13 +93,15 @@ impl Executor {
     pub fn new(gpu: &Gpu, graph: Graph, seed: u64) -> Result<Executor> {
         crate::ops::conv::calibrate(gpu);
         let n = graph.values.len();
-        let mut values = vec![None; n];
+        let init = |v: Value| match &graph.values[v.0].kind {
+            Kind::Param(init) => init.values(&graph.values[v.0].shape, seed, v.0 as u64),
+            _ => Vec::new(),
+        };
+        let (flat, mut values) = Flat::new(gpu, &graph, init)?;
         for (i, v) in graph.values.iter().enumerate() {
-            values[i] = match &v.kind {
-                Kind::Input => Some(Tensor::zeros(gpu, &v.shape)?),
-                Kind::Param(init) => Some(Tensor::from_slice(gpu, &v.shape, &init.values(&v.shape, seed, i as u64))?),
-                Kind::Node => None,
-            };
+            if matches!(v.kind, Kind::Input) {
+                values[i] = Some(Tensor::zeros(gpu, &v.shape)?);
+            }
         }
         let grad_wanted = graph.values.iter().map(|v| matches!(v.kind, Kind::Param(_))).collect();
         Ok(Executor {
@@ -102,6 +114,8 @@ impl Executor {
             step: 0,
             seed,
             adam_state: vec![None; n],
+            flat,
+            guard_flat: false,
             loss_one: None,
             guard: None,
             memos: Default::default(),
@@ -393,7 +407,13 @@ impl Executor {
             return Ok(loss);
         }
         let params = self.graph.params();
-        let bad = (1..flags.len()).find(|&k| flags[k] != 0.0).map(|k| self.graph.info(params[k - 1]).name.clone());
+        let bad = if self.guard_flat {
+            // Flags per chunk of the flat gradients: find the parameter by reading them back.
+            let finite = |v: &Value| self.grads[v.0].as_ref().map(|g| g.to_vec(gpu).map(|x| x.iter().all(|x| x.is_finite())));
+            params.iter().find(|v| matches!(finite(v), Some(Ok(false)))).map(|v| self.graph.info(*v).name.clone())
+        } else {
+            (1..flags.len()).find(|&k| flags[k] != 0.0).map(|k| self.graph.info(params[k - 1]).name.clone())
+        };
         Err(Error::Invalid(format!(
             "step {}: the gradient of '{}' holds NaN or Inf; the update was skipped and the weights are unchanged",
             self.step + 1,
@@ -401,34 +421,47 @@ impl Executor {
         )))
     }
 
+    /// Parameter `v`'s Adam moments, views of the flat moment buffers.
+    pub(crate) fn moments_of(&mut self, gpu: &Gpu, v: Value) -> Result<(Tensor, Tensor)> {
+        self.flat.moments(gpu, &self.graph, v)
+    }
+
     /// Adam on every parameter that received a gradient, guarded: every gradient is checked
     /// for NaN/Inf first and, if any is bad, no parameter moves. Moments are created
-    /// (zeroed) on first use and kept for checkpoints.
+    /// (zeroed) on first use and kept for checkpoints. When every parameter has a gradient
+    /// (a training step), the check and the update each run once over the flat buffers.
     fn record_adam(&mut self, gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, adam: &ops::adam::Adam) -> Result<()> {
         let t = u32::try_from(self.step + 1).map_err(|_| Error::Invalid("optimizer step beyond u32".into()))?;
         let params = self.graph.params();
         if self.guard.is_none() {
-            let flags = Tensor::zeros(gpu, &[1 + params.len()])?;
+            let flags = Tensor::zeros(gpu, &[1 + params.len().max(FLAT_CHUNKS)])?;
             // The flags, then the loss.
             let staging = gpu.new_buffer("guard readback", flags.buffer().size() + 4, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
             self.guard = Some((flags, staging));
         }
         let flags = self.guard.as_ref().expect("just set").0.clone();
-        for (k, v) in params.iter().enumerate() {
-            if let Some(g) = self.grads[v.0].as_ref() {
-                ops::finite::check(gpu, pass, g, &flags, k + 1)?;
+        for v in &params {
+            if self.grads[v.0].is_some() && self.adam_state[v.0].is_none() {
+                self.adam_state[v.0] = Some(self.flat.moments(gpu, &self.graph, *v)?);
             }
         }
-        ops::finite::any(gpu, pass, &flags, params.len())?;
-        for v in params {
-            let Some(g) = self.grads[v.0].as_ref() else { continue };
-            let shape = &self.graph.values[v.0].shape;
-            if self.adam_state[v.0].is_none() {
-                self.adam_state[v.0] = Some((Tensor::zeros(gpu, shape)?, Tensor::zeros(gpu, shape)?));
+        self.guard_flat = params.iter().all(|v| self.grads[v.0].as_ref().is_some_and(Tensor::is_view));
+        if let Some([p, g, m, s]) = self.flat.whole().filter(|_| self.guard_flat) {
+            let chunks = ops::finite::check_chunks(gpu, pass, &g, &flags, FLAT_CHUNKS)?;
+            ops::finite::any(gpu, pass, &flags, chunks)?;
+            adam.step_guarded(gpu, pass, t, &p, &g, &m, &s, Some(&flags))?;
+        } else {
+            for (k, v) in params.iter().enumerate() {
+                if let Some(g) = self.grads[v.0].as_ref() {
+                    ops::finite::check(gpu, pass, g, &flags, k + 1)?;
+                }
             }
-            let (m, s) = self.adam_state[v.0].as_ref().expect("just set");
-            let p = self.values[v.0].as_ref().expect("params are always allocated");
-            adam.step_guarded(gpu, pass, t, p, g, m, s, Some(&flags))?;
+            ops::finite::any(gpu, pass, &flags, params.len())?;
+            for v in params {
+                let (Some(g), Some((m, s))) = (self.grads[v.0].as_ref(), self.adam_state[v.0].as_ref()) else { continue };
+                let p = self.values[v.0].as_ref().expect("params are always allocated");
+                adam.step_guarded(gpu, pass, t, p, g, m, s, Some(&flags))?;
+            }
         }
         if let Some(proj) = &self.projector {
             for v in &self.resize_convs {
@@ -505,7 +538,12 @@ impl Executor {
                 }
                 let seen = self.grads[i.0].is_some() || n.inputs[..j].contains(i);
                 let shape = self.graph.values[i.0].shape.clone();
-                let t = self.pool.tensor(gpu, &shape)?;
+                // A parameter's gradient lives in the flat gradient buffer (see `Flat`).
+                let t = if !seen && matches!(self.graph.values[i.0].kind, Kind::Param(_)) {
+                    self.flat.grad(gpu, &self.graph, *i)?
+                } else {
+                    self.pool.tensor(gpu, &shape)?
+                };
                 if !seen {
                     total += bytes(&shape);
                     self.grads[i.0] = Some(t.clone());

@@ -6,6 +6,7 @@
 //! node and the shapes. An [`Executor`] owns the GPU tensors for one graph.
 
 mod exec;
+mod flat;
 mod op;
 pub mod params;
 pub mod profile;

@@ -6,7 +6,7 @@
 
 use super::exec::Executor;
 use crate::error::{Error, Result};
-use crate::gpu::{Gpu, Tensor};
+use crate::gpu::Gpu;
 use crate::rng::SplitMix64;
 use safetensors::{Dtype, SafeTensors, tensor::TensorView};
 use std::collections::{BTreeMap, HashMap};
@@ -297,9 +297,19 @@ impl Executor {
             let (m, s) = (moments.remove(&format!("adam.m.{}", info.name)), moments.remove(&format!("adam.v.{}", info.name)));
             self.adam_state[v.0] = match (m, s) {
                 (Some((ms, m)), Some((vs, s))) if ms == info.shape && vs == info.shape => {
-                    Some((Tensor::from_slice(gpu, &ms, &m)?, Tensor::from_slice(gpu, &vs, &s)?))
+                    let (tm, ts) = self.moments_of(gpu, v)?;
+                    tm.write(gpu, &m)?;
+                    ts.write(gpu, &s)?;
+                    Some((tm, ts))
                 }
-                (None, None) => None,
+                (None, None) => {
+                    // Fresh moments: zero what an earlier run of this executor left there.
+                    let (tm, ts) = self.moments_of(gpu, v)?;
+                    let zeros = vec![0.0; tm.numel()];
+                    tm.write(gpu, &zeros)?;
+                    ts.write(gpu, &zeros)?;
+                    None
+                }
                 _ => return Err(Error::Invalid(format!("{}: Adam moments of '{}' are incomplete or mis-shaped", path.display(), info.name))),
             };
         }

@@ -25,6 +25,24 @@ pub fn check(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, flags: &Te
     gpu.dispatch(pass, SHADER, entry, &p, &[Arg::R(x), Arg::W(flags)], [1, 1, 1])
 }
 
+/// Checks all of `x` (a multiple of 4 values: the executor's flat gradient buffer) in up to
+/// `chunks` workgroups of one dispatch, setting `flags[1 + g]` for chunk `g`; returns the
+/// number of chunks, the `count` to pass to [`any`].
+pub fn check_chunks(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, flags: &Tensor, chunks: usize) -> Result<usize> {
+    let n = x.numel();
+    if !n.is_multiple_of(4) || chunks == 0 || chunks >= flags.numel() {
+        return Err(shape_err(
+            "finite_check_chunks",
+            format!("{n} values (must be a multiple of 4) in {chunks} chunks (1..{} for flags {:?})", flags.numel(), flags.shape()),
+        ));
+    }
+    let per = (n / 4).div_ceil(chunks);
+    let groups = (n / 4).div_ceil(per);
+    let p = Params { n: n as u32, slot: per as u32 };
+    gpu.dispatch(pass, SHADER, "finite_check_chunks_vec4", &p, &[Arg::R(x), Arg::W(flags)], [groups as u32, 1, 1])?;
+    Ok(groups)
+}
+
 /// `flags[0] = 1` if any of `flags[1..=count]` is set, else 0.
 pub fn any(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, flags: &Tensor, count: usize) -> Result<()> {
     if count + 1 > flags.numel() {
