@@ -511,3 +511,62 @@ fn upsample_init_gives_no_checkerboard() {
     assert!(spread(Init::XavierUpsample) < 1e-5, "phases differ: {}", spread(Init::XavierUpsample));
     assert!(spread(Init::Xavier) > 1e-2, "plain Xavier unexpectedly flat: {}", spread(Init::Xavier));
 }
+
+/// `Conv::backward` (both gradients in one call) equals `backward_input` then
+/// `backward_weight` exactly on every kernel family, and on textures packs dy once where the
+/// two packings agree (16 or at most 4 output channels: one dispatch fewer) but not where
+/// they differ (8 or 20: dy padded to 8 or 20 channels for dx, 16 or 32 for dw).
+#[test]
+fn backward_in_one_call_equals_the_two_passes_and_packs_dy_once() {
+    // A device of its own: dispatch counts are per device, and other tests share `gpu()`.
+    let dev = rendernet::Gpu::new().unwrap();
+    let textures = dev.has_subgroups_of_8() && dev.reads_rgba32f_storage();
+    for (k, (c, co)) in [
+        (conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 16),
+        (conv2d([3, 3], [1, 1], Padding::Same), 3),
+        (conv3d([3, 3, 3], [2, 1, 2], Padding::Same), 16),
+        (conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 8),
+        (conv2d([4, 3], [2, 1], Padding::explicit_2d([2, 0], [1, 1])), 20),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let down = |t: &rendernet::Tensor| t.to_vec(&dev).unwrap();
+        let Op::Conv(op) = c.op else { unreachable!() };
+        let c = Case { co, ..c };
+        let g = geom(&c);
+        let (xs, ws, ys) = (shape(c.d2, c.n, c.ci, g.input), w_shape(&c), shape(c.d2, c.n, c.co, g.output));
+        let mut rng = Rng(300 + k as u64);
+        let mut up = |s: &[usize]| rendernet::Tensor::from_slice(&dev, s, &rng.vec(s.iter().product(), -1.0, 1.0).iter().map(|&v| v as f32).collect::<Vec<_>>()).unwrap();
+        let (tx, tw, tdy) = (up(&xs), up(&ws), up(&ys));
+        for kernel in [ConvKernel::Reference, ConvKernel::Buffers, ConvKernel::Texture] {
+            let (dx1, dw1, dx2, dw2) = (rendernet::Tensor::zeros(&dev, &xs).unwrap(), rendernet::Tensor::zeros(&dev, &ws).unwrap(), rendernet::Tensor::zeros(&dev, &xs).unwrap(), rendernet::Tensor::zeros(&dev, &ws).unwrap());
+            let d0 = dev.dispatch_count();
+            on(&dev, |p| {
+                op.backward_input(kernel, &dev, p, &tdy, &tw, &dx1)?;
+                op.backward_weight(kernel, &dev, p, &tx, &tdy, &dw1)
+            });
+            let d1 = dev.dispatch_count();
+            on(&dev, |p| op.backward(kernel, &dev, p, &tx, &tw, &tdy, Some(&dx2), Some(&dw2)));
+            let d2 = dev.dispatch_count();
+            let what = format!("{kernel:?} {co} channels {:?}", op);
+            assert_eq!(down(&dx2), down(&dx1), "dx, {what}");
+            assert_eq!(down(&dw2), down(&dw1), "dw, {what}");
+            let shared = textures && kernel == ConvKernel::Texture && (co == 16 || co <= 4);
+            assert_eq!(d2 - d1, d1 - d0 - shared as u64, "dispatches, {what}");
+        }
+        // Either gradient alone.
+        let (dx, dw) = (rendernet::Tensor::zeros(&dev, &xs).unwrap(), rendernet::Tensor::zeros(&dev, &ws).unwrap());
+        on(&dev, |p| op.backward(ConvKernel::Texture, &dev, p, &tx, &tw, &tdy, Some(&dx), None));
+        on(&dev, |p| op.backward(ConvKernel::Texture, &dev, p, &tx, &tw, &tdy, None, Some(&dw)));
+        let (dx1, dw1) = (rendernet::Tensor::zeros(&dev, &xs).unwrap(), rendernet::Tensor::zeros(&dev, &ws).unwrap());
+        on(&dev, |p| op.backward_input(ConvKernel::Texture, &dev, p, &tdy, &tw, &dx1));
+        on(&dev, |p| op.backward_weight(ConvKernel::Texture, &dev, p, &tx, &tdy, &dw1));
+        assert_eq!((down(&dx), down(&dw)), (down(&dx1), down(&dw1)), "one gradient at a time, {co} channels");
+    }
+}
+
+/// Records `f` into one pass on `dev`, submits and waits.
+fn on(dev: &rendernet::Gpu, f: impl FnOnce(&mut wgpu::ComputePass<'_>) -> rendernet::Result<()>) {
+    dev.run(f).unwrap()
+}

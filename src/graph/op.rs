@@ -261,8 +261,7 @@ impl Op {
                 some(dx[2], |d| ops::projection::backward_bias(g, p, dy, d))
             }
             Op::Conv(cv) => {
-                some(dx[0], |d| cv.backward_input(AUTO, g, p, dy, x[1], d))?;
-                some(dx[1], |d| cv.backward_weight(AUTO, g, p, x[0], dy, d))?;
+                cv.backward(AUTO, g, p, x[0], x[1], dy, dx[0], dx[1])?;
                 some(dx[2], |d| ops::conv::backward_bias(g, p, dy, d))
             }
             Op::ConvTranspose(cv) => {

@@ -295,6 +295,42 @@ impl Conv {
     }
 }
 
+impl Conv {
+    /// The gradients `dx` and `dw` wanted (either may be `None`) from `x`, `w` and `dy` on
+    /// `kernel`: [`Conv::backward_input`] and [`Conv::backward_weight`] in one call, which
+    /// lets the tiled kernels pack `dy` once for both (one dispatch and one pass over dy
+    /// fewer); the results are the same.
+    #[allow(clippy::too_many_arguments)]
+    pub fn backward(
+        &self,
+        kernel: ConvKernel,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        x: &Tensor,
+        w: &Tensor,
+        dy: &Tensor,
+        dx: Option<&Tensor>,
+        dw: Option<&Tensor>,
+    ) -> Result<()> {
+        const OP: &str = "conv_backward";
+        let g = self.geometry(OP, x.shape(), w.shape())?;
+        expect_shape(OP, "dy", dy, &g.y_shape())?;
+        match (dx, dw) {
+            (Some(dx), Some(dw)) if use_fast(kernel, Pass::BackwardInput, &g) && use_fast(kernel, Pass::BackwardWeight, &g) => {
+                expect_shape(OP, "dx", dx, x.shape())?;
+                expect_shape(OP, "dw", dw, w.shape())?;
+                conv_fast::backward(gpu, pass, &g, x, dy, w, dx, dw, operands(gpu, kernel))
+            }
+            _ => {
+                if let Some(dx) = dx {
+                    self.backward_input(kernel, gpu, pass, dy, w, dx)?;
+                }
+                dw.map_or(Ok(()), |dw| self.backward_weight(kernel, gpu, pass, x, dy, dw))
+            }
+        }
+    }
+}
+
 /// `db[c] = Σ_{n, spatial} dy[n, c, ...]`: the bias gradient of a conv or transposed conv
 /// (any `[N, C, spatial...]` tensor); `db` has shape `[C]`.
 pub fn backward_bias(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, dy: &Tensor, db: &Tensor) -> Result<()> {

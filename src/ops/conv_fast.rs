@@ -339,12 +339,60 @@ pub(crate) fn backward_input(
     dx: &Tensor,
     ops: Operands,
 ) -> Result<()> {
+    let (whole, cpad, tex) = dy_packing(gpu, g, ops);
+    let dyp = pack_x(gpu, pass, &whole, &Folded::none(whole), dy, cpad, tex)?;
+    backward_input_packed(gpu, pass, g, &dyp, w, b, dx, cpad, tex)
+}
+
+/// How `backward_input` packs dy: the dispatch geometry (dy as the input, at most the whole
+/// kernel), its packed channels and whether on textures.
+fn dy_packing(gpu: &Gpu, g: &Geometry, ops: Operands) -> (Geometry, usize, bool) {
     let cpad = g.co.div_ceil(4) * 4;
-    // The dispatch geometry's input is dy; its kernel at most the whole kernel.
     let whole = Geometry { ci: g.co, co: g.ci, input: g.output, output: g.input, stride: [1; 3], pad: [0; 3], ..*g };
-    let tex = textures_fit(gpu, ops, &whole, cpad);
-    let unfolded = Folded::none(whole);
-    let dyp = pack_x(gpu, pass, &whole, &unfolded, dy, cpad, tex)?;
+    (whole, cpad, textures_fit(gpu, ops, &whole, cpad))
+}
+
+/// Both gradients of one conv, `dx = conv^T(dy, w)` and `dw`, packing dy once where the two
+/// would pack it alike (on textures, with 4 or fewer or a multiple of 16 output channels: the
+/// 16-channel convs and the heads of the RenderNet presets): one dispatch and one pass over
+/// dy fewer than [`backward_input`] then [`backward_weight`], which it equals exactly.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn backward(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    x: &Tensor,
+    dy: &Tensor,
+    w: &Tensor,
+    dx: &Tensor,
+    dw: &Tensor,
+    ops: Operands,
+) -> Result<()> {
+    let (whole, cpad, tex) = dy_packing(gpu, g, ops);
+    let wt = weight_textures(gpu, g, ops);
+    if !(tex && wt.as_ref().is_some_and(|&(_, _, dy_cpad)| dy_cpad == cpad)) {
+        backward_input(gpu, pass, g, dy, w, None, dx, ops)?;
+        return backward_weight(gpu, pass, g, x, dy, dw, ops);
+    }
+    let dyp = pack_x(gpu, pass, &whole, &Folded::none(whole), dy, cpad, tex)?;
+    backward_input_packed(gpu, pass, g, &dyp, w, None, dx, cpad, tex)?;
+    let (f, xcpad, _) = wt.expect("checked");
+    backward_weight_tex(gpu, pass, g, &f, x, &dyp, dw, xcpad)
+}
+
+/// [`backward_input`] on dy packed by [`dy_packing`]'s rule.
+#[allow(clippy::too_many_arguments)]
+fn backward_input_packed(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    dyp: &Packed,
+    w: &Tensor,
+    b: Option<&Tensor>,
+    dx: &Tensor,
+    cpad: usize,
+    tex: bool,
+) -> Result<()> {
     let [_, fh, fw] = g.input;
     let [sd, sh, sw] = g.stride;
     for i in 0..volume(g.stride) {
@@ -383,12 +431,36 @@ pub(crate) fn backward_input(
             yoff: u((r[0] * fh + r[1]) * fw + r[2]),
             ..base
         };
-        forward_packed(gpu, pass, p, &dyp, &wp, b, dx)?;
+        forward_packed(gpu, pass, p, dyp, &wp, b, dx)?;
     }
     Ok(())
 }
 
-/// `backward_weight` on textures (see `conv_fast_backward_weight_tex`).
+/// `dy` packed as the texture kernels pack an input: dy's channels over the output extent
+/// (at most 4 channels: one quad per voxel, for the 4-channel kernel).
+fn pack_dy_tex(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, dy: &Tensor) -> Result<Packed> {
+    let dy_geom = Geometry { ci: g.co, input: g.output, ..*g };
+    pack_x(gpu, pass, &dy_geom, &Folded::none(dy_geom), dy, dy_tex_channels(g), true)
+}
+
+/// Channels of dy as packed for the texture weight gradient (part keeps `copad`).
+fn dy_tex_channels(g: &Geometry) -> usize {
+    if g.co <= 4 { 4 } else { g.co.div_ceil(16) * 16 }
+}
+
+/// Whether `backward_weight` of `g` runs on textures for `ops`, with the fold and packed
+/// input channels it uses and dy's packed channels.
+fn weight_textures(gpu: &Gpu, g: &Geometry, ops: Operands) -> Option<(Folded, usize, usize)> {
+    let f = fold(g, 4);
+    let cpad = f.g.ci.div_ceil(4) * 4;
+    let copad = g.co.div_ceil(16) * 16;
+    // Two activation textures (x folded, dy) and no weight texture.
+    let fits = textures_wanted(gpu, ops) && x_texture_fits(gpu, g.n, cpad, f.g.input) && x_texture_fits(gpu, g.n, copad, g.output);
+    fits.then(|| (f, cpad, dy_tex_channels(g)))
+}
+
+/// `backward_weight` on textures (see `conv_fast_backward_weight_tex`), dy packed by
+/// [`pack_dy_tex`].
 #[allow(clippy::too_many_arguments)]
 fn backward_weight_tex(
     gpu: &Gpu,
@@ -396,17 +468,13 @@ fn backward_weight_tex(
     g: &Geometry,
     f: &Folded,
     x: &Tensor,
-    dy: &Tensor,
+    dyp: &Packed,
     dw: &Tensor,
     cpad: usize,
-    copad: usize,
 ) -> Result<()> {
     let xp = pack_x(gpu, pass, g, f, x, cpad, true)?;
-    // dy is packed as the texture kernels pack an input: dy's channels over the output extent.
-    // At most 4 channels: one quad per voxel and the 4-channel kernel (part keeps copad).
     let narrow = g.co <= 4;
-    let dy_geom = Geometry { ci: g.co, input: g.output, ..*g };
-    let dyp = pack_x(gpu, pass, &dy_geom, &Folded::none(dy_geom), dy, if narrow { 4 } else { copad }, true)?;
+    let copad = g.co.div_ceil(16) * 16;
     let g = &f.g;
     let taps = volume(g.kernel);
     let groups = (taps * cpad / 4).div_ceil(8) * (copad / 16);
@@ -436,12 +504,9 @@ pub(crate) fn backward_weight(
     dw: &Tensor,
     ops: Operands,
 ) -> Result<()> {
-    let f = fold(g, 4);
-    let cpad = f.g.ci.div_ceil(4) * 4;
-    let copad = g.co.div_ceil(16) * 16;
-    // Two activation textures (x folded, dy) and no weight texture.
-    if textures_wanted(gpu, ops) && x_texture_fits(gpu, g.n, cpad, f.g.input) && x_texture_fits(gpu, g.n, copad, g.output) {
-        return backward_weight_tex(gpu, pass, g, &f, x, dy, dw, cpad, copad);
+    if let Some((f, cpad, _)) = weight_textures(gpu, g, ops) {
+        let dyp = pack_dy_tex(gpu, pass, g, dy)?;
+        return backward_weight_tex(gpu, pass, g, &f, x, &dyp, dw, cpad);
     }
     let f = fold(g, 8);
     let (cpad, copad) = (f.g.ci.div_ceil(8) * 8, g.co.div_ceil(16) * 16);
