@@ -518,9 +518,7 @@ fn upsample_init_gives_no_checkerboard() {
 /// they differ (8 or 20: dy padded to 8 or 20 channels for dx, 16 or 32 for dw).
 #[test]
 fn backward_in_one_call_equals_the_two_passes_and_packs_dy_once() {
-    // A device of its own: dispatch counts are per device, and other tests share `gpu()`.
-    let dev = rendernet::Gpu::new().unwrap();
-    let textures = dev.has_subgroups_of_8() && dev.reads_rgba32f_storage();
+    let textures = gpu().has_subgroups_of_8() && gpu().reads_rgba32f_storage();
     for (k, (c, co)) in [
         (conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 16),
         (conv2d([3, 3], [1, 1], Padding::Same), 3),
@@ -531,42 +529,37 @@ fn backward_in_one_call_equals_the_two_passes_and_packs_dy_once() {
     .into_iter()
     .enumerate()
     {
-        let down = |t: &rendernet::Tensor| t.to_vec(&dev).unwrap();
         let Op::Conv(op) = c.op else { unreachable!() };
         let c = Case { co, ..c };
         let g = geom(&c);
         let (xs, ws, ys) = (shape(c.d2, c.n, c.ci, g.input), w_shape(&c), shape(c.d2, c.n, c.co, g.output));
         let mut rng = Rng(300 + k as u64);
-        let mut up = |s: &[usize]| rendernet::Tensor::from_slice(&dev, s, &rng.vec(s.iter().product(), -1.0, 1.0).iter().map(|&v| v as f32).collect::<Vec<_>>()).unwrap();
+        let mut up = |s: &[usize]| upload(s, &rng.vec(s.iter().product(), -1.0, 1.0));
         let (tx, tw, tdy) = (up(&xs), up(&ws), up(&ys));
         for kernel in [ConvKernel::Reference, ConvKernel::Buffers, ConvKernel::Texture] {
-            let (dx1, dw1, dx2, dw2) = (rendernet::Tensor::zeros(&dev, &xs).unwrap(), rendernet::Tensor::zeros(&dev, &ws).unwrap(), rendernet::Tensor::zeros(&dev, &xs).unwrap(), rendernet::Tensor::zeros(&dev, &ws).unwrap());
-            let d0 = dev.dispatch_count();
-            on(&dev, |p| {
-                op.backward_input(kernel, &dev, p, &tdy, &tw, &dx1)?;
-                op.backward_weight(kernel, &dev, p, &tx, &tdy, &dw1)
+            let (dx1, dw1, dx2, dw2) = (zeros(&xs), zeros(&ws), zeros(&xs), zeros(&ws));
+            let d0 = gpu().dispatch_count();
+            run(|p| {
+                op.backward_input(kernel, gpu(), p, &tdy, &tw, &dx1)?;
+                op.backward_weight(kernel, gpu(), p, &tx, &tdy, &dw1)
             });
-            let d1 = dev.dispatch_count();
-            on(&dev, |p| op.backward(kernel, &dev, p, &tx, &tw, &tdy, Some(&dx2), Some(&dw2)));
-            let d2 = dev.dispatch_count();
+            let d1 = gpu().dispatch_count();
+            run(|p| op.backward(kernel, gpu(), p, &tx, &tw, &tdy, Some(&dx2), Some(&dw2)));
+            let d2 = gpu().dispatch_count();
             let what = format!("{kernel:?} {co} channels {:?}", op);
-            assert_eq!(down(&dx2), down(&dx1), "dx, {what}");
-            assert_eq!(down(&dw2), down(&dw1), "dw, {what}");
+            assert_eq!(download(&dx2), download(&dx1), "dx, {what}");
+            assert_eq!(download(&dw2), download(&dw1), "dw, {what}");
             let shared = textures && kernel == ConvKernel::Texture && (co == 16 || co <= 4);
             assert_eq!(d2 - d1, d1 - d0 - shared as u64, "dispatches, {what}");
         }
         // Either gradient alone.
-        let (dx, dw) = (rendernet::Tensor::zeros(&dev, &xs).unwrap(), rendernet::Tensor::zeros(&dev, &ws).unwrap());
-        on(&dev, |p| op.backward(ConvKernel::Texture, &dev, p, &tx, &tw, &tdy, Some(&dx), None));
-        on(&dev, |p| op.backward(ConvKernel::Texture, &dev, p, &tx, &tw, &tdy, None, Some(&dw)));
-        let (dx1, dw1) = (rendernet::Tensor::zeros(&dev, &xs).unwrap(), rendernet::Tensor::zeros(&dev, &ws).unwrap());
-        on(&dev, |p| op.backward_input(ConvKernel::Texture, &dev, p, &tdy, &tw, &dx1));
-        on(&dev, |p| op.backward_weight(ConvKernel::Texture, &dev, p, &tx, &tdy, &dw1));
-        assert_eq!((down(&dx), down(&dw)), (down(&dx1), down(&dw1)), "one gradient at a time, {co} channels");
+        let (dx, dw) = (zeros(&xs), zeros(&ws));
+        run(|p| op.backward(ConvKernel::Texture, gpu(), p, &tx, &tw, &tdy, Some(&dx), None));
+        run(|p| op.backward(ConvKernel::Texture, gpu(), p, &tx, &tw, &tdy, None, Some(&dw)));
+        let (dx1, dw1) = (zeros(&xs), zeros(&ws));
+        run(|p| op.backward_input(ConvKernel::Texture, gpu(), p, &tdy, &tw, &dx1));
+        run(|p| op.backward_weight(ConvKernel::Texture, gpu(), p, &tx, &tdy, &dw1));
+        assert_eq!((download(&dx), download(&dw)), (download(&dx1), download(&dw1)), "one gradient at a time, {co} channels");
     }
 }
 
-/// Records `f` into one pass on `dev`, submits and waits.
-fn on(dev: &rendernet::Gpu, f: impl FnOnce(&mut wgpu::ComputePass<'_>) -> rendernet::Result<()>) {
-    dev.run(f).unwrap()
-}

@@ -246,7 +246,7 @@ impl Gpu {
         pass.set_pipeline(&p.pipeline);
         pass.set_bind_group(0, &bg, &[offset]);
         pass.dispatch_workgroups(workgroups[0], workgroups[1], workgroups[2]);
-        self.dispatches.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.count_dispatch();
         Ok(())
     }
 }

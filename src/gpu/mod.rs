@@ -22,6 +22,7 @@ use std::sync::{Arc, Mutex};
 
 thread_local! {
     static SUBMITS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+    static DISPATCHES: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
 }
 
 /// A GPU (or lavapipe) device with its queue, limits and caches.
@@ -41,7 +42,6 @@ pub struct Gpu {
     /// Bound in place of an absent optional input (a conv without bias): wgpu forbids
     /// binding the same buffer as read and read-write in one dispatch, so aliasing is no option.
     dummy: wgpu::Buffer,
-    dispatches: std::sync::atomic::AtomicU64,
     /// Whether `ConvKernel::Auto` reads textures (decided once per device by
     /// `ops::conv_fast::calibrated`).
     pub(crate) conv_textures: std::sync::OnceLock<bool>,
@@ -68,14 +68,19 @@ impl Gpu {
             pipelines: Mutex::new(HashMap::new()),
             modules: Mutex::new(HashMap::new()),
             dummy,
-            dispatches: Default::default(),
             conv_textures: Default::default(),
         })
     }
 
-    /// Dispatches recorded since the device was opened (for per-step statistics).
+    /// Dispatches recorded by the calling thread, on any device (for per-step statistics: a
+    /// step's count is then its own even while other threads share the device).
     pub fn dispatch_count(&self) -> u64 {
-        self.dispatches.load(std::sync::atomic::Ordering::Relaxed)
+        DISPATCHES.with(|c| c.get())
+    }
+
+    /// Counts one recorded dispatch (see [`Gpu::dispatch_count`]).
+    pub(crate) fn count_dispatch(&self) {
+        DISPATCHES.with(|c| c.set(c.get() + 1));
     }
 
     /// Queue submits (each followed by a wait) made by the calling thread, on any device: a
