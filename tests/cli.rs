@@ -66,7 +66,8 @@ fn bench_json_reports_speed_against_the_same_run_ceiling() {
 
 /// `bench --operands --json`: one row per kind of operand, the plain FMA first with nothing
 /// beyond itself, every cost finite and positive, and each row's extra cost counted in
-/// ceiling FMAs by one same-run factor; with --filter it is refused (it times no kernels).
+/// ceiling FMAs by one same-run factor, an empty dispatch's cost beside them; with --filter
+/// it is refused (it times no kernels).
 #[test]
 fn bench_operands_prices_each_operand_against_the_fma() {
     let out = rendernet().args(["bench", "--operands", "--json", "--repeat", "1"]).output().unwrap();
@@ -85,6 +86,11 @@ fn bench_operands_prices_each_operand_against_the_fma() {
         assert!((f(r, "ns_per_vector") - f(&rows[0], "ns_per_vector") - f(r, "extra_ns")).abs() < 1e-9, "{r}");
         assert!((f(r, "extra_in_fmas") - f(r, "extra_ns") * per_ns).abs() < 1e-6 * f(r, "extra_in_fmas").abs().max(1.0), "{r}");
     }
+    // An empty dispatch's time, and the same time in ceiling FMAs (2 FLOPs each).
+    let (us, fmas) = (v["dispatch_us"].as_f64().expect("dispatch_us"), v["dispatch_in_fmas"].as_f64().expect("dispatch_in_fmas"));
+    assert!(us > 0.0 && us < 1e5, "{v}");
+    let ceiling = v["fma_ceiling_gflops"].as_f64().unwrap();
+    assert!((fmas - us * ceiling * 1e3 / 2.0).abs() < 1e-6 * fmas, "{v}");
     let refused = rendernet().args(["bench", "--operands", "--filter", "conv3d"]).output().unwrap();
     let stderr = String::from_utf8_lossy(&refused.stderr);
     assert!(!refused.status.success() && stderr.contains("--operands") && stderr.contains("--filter"), "{stderr}");

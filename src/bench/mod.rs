@@ -125,6 +125,24 @@ pub fn fma_ceiling(gpu: &Gpu, clock: Clock, samples: usize) -> Result<f64> {
     Ok(best)
 }
 
+/// Microseconds one (almost) empty dispatch takes on the device, the best of `samples`
+/// timings of 256 of them in one pass: `bench_fma` with no iterations on one workgroup. On
+/// lavapipe this is the thread pool's wake-up and wait around every dispatch, whatever the
+/// dispatch computes (see README "Benchmarks").
+pub fn dispatch_cost_us(gpu: &Gpu, clock: Clock, samples: usize) -> Result<f64> {
+    use crate::gpu::{Arg, Shader, Tensor, wgsl};
+    const SHADER: Shader = wgsl!("bench_fma");
+    let out = Tensor::zeros(gpu, &[64])?;
+    let params: [u32; 2] = [0, 64]; // iters, total
+    let mut record = |pass: &mut wgpu::ComputePass<'_>| gpu.dispatch(pass, SHADER, "bench_fma", &params, &[Arg::W(&out)], [1, 1, 1]);
+    time_calls(gpu, clock, 1, &mut record)?; // compile
+    let mut best = f64::INFINITY;
+    for _ in 0..samples.max(1) {
+        best = best.min(time_calls(gpu, clock, 256, &mut record)? * 1e3);
+    }
+    Ok(best)
+}
+
 /// The CPU model (Linux `/proc/cpuinfo`), which decides lavapipe's speed: a kernel's speed on
 /// lavapipe is only meaningful next to it. `None` where it cannot be read.
 pub fn cpu_model() -> Option<String> {

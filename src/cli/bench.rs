@@ -370,13 +370,17 @@ fn operands(gpu: &Gpu, clock: Clock, repeat: usize, json: bool) -> Result<()> {
     }
     let (cpu, ceiling) = (bench::cpu_model(), bench::fma_ceiling(gpu, clock, 5)?);
     let costs = bench::operands::operand_costs(gpu, clock, repeat, ceiling)?;
+    let dispatch_us = bench::dispatch_cost_us(gpu, clock, repeat)?;
+    // What the device could have computed meanwhile: FMAs at the ceiling (2 FLOPs each).
+    let dispatch_fmas = dispatch_us * 1e-6 * ceiling * 1e9 / 2.0;
     if json {
         let rows: Vec<_> = costs
             .iter()
             .map(|c| serde_json::json!({"operand": c.operand, "address": c.address, "ns_per_vector": finite(c.ns_per_vector),
                                          "extra_ns": finite(c.extra_ns), "extra_in_fmas": finite(c.extra_in_fmas)}))
             .collect();
-        let out = serde_json::json!({"adapter": gpu.info.name, "cpu": cpu, "fma_ceiling_gflops": finite(ceiling), "operands": rows});
+        let out = serde_json::json!({"adapter": gpu.info.name, "cpu": cpu, "fma_ceiling_gflops": finite(ceiling), "operands": rows,
+                                     "dispatch_us": finite(dispatch_us), "dispatch_in_fmas": finite(dispatch_fmas)});
         println!("{}", serde_json::to_string_pretty(&out).map_err(|e| rendernet::Error::Invalid(e.to_string()))?);
         return Ok(());
     }
@@ -390,5 +394,6 @@ fn operands(gpu: &Gpu, clock: Clock, repeat: usize, json: bool) -> Result<()> {
     // What the loop itself costs: the plain FMA row against an FMA at the ceiling.
     let loop_fma = costs[0].ns_per_vector / bench::operands::ceiling_fma_ns(ceiling);
     println!("(a plain FMA in this loop, one per loop-carried value and iteration, costs {loop_fma:.1} FMAs at the ceiling)");
+    println!("An (almost) empty dispatch of one workgroup, best of {repeat}: {dispatch_us:.1} us ({:.2} million FMAs at the ceiling)", dispatch_fmas * 1e-6);
     Ok(())
 }
