@@ -17,13 +17,23 @@ fn away_from_zero(rng: &mut Rng, n: usize, gap: f64) -> Vec<f64> {
 // Odd, non-power-of-two shape with batch > 1.
 const SHAPE: [usize; 4] = [2, 3, 5, 7];
 
+/// Shapes for the elementwise ops: SHAPE (210 values, one per invocation) and 360 values
+/// (a multiple of 4: four per invocation, 90 invocations over two workgroups).
+const SHAPES: [[usize; 4]; 2] = [SHAPE, [2, 3, 5, 12]];
+
 #[test]
 fn sigmoid_forward_and_backward() {
-    let n: usize = SHAPE.iter().product();
+    for shape in SHAPES {
+        sigmoid_case(shape);
+    }
+}
+
+fn sigmoid_case(shape: [usize; 4]) {
+    let n: usize = shape.iter().product();
     let mut rng = Rng(1);
     let x = f32_round(&rng.vec(n, -4.0, 4.0));
     let r = f32_round(&rng.vec(n, -1.0, 1.0));
-    let (tx, ty, tr, tdx) = (upload(&SHAPE, &x), zeros(&SHAPE), upload(&SHAPE, &r), zeros(&SHAPE));
+    let (tx, ty, tr, tdx) = (upload(&shape, &x), zeros(&shape), upload(&shape, &r), zeros(&shape));
     run(|p| {
         sigmoid::forward(gpu(), p, &tx, &ty)?;
         sigmoid::backward(gpu(), p, &ty, &tr, &tdx)
@@ -150,7 +160,12 @@ fn dropout_mask_is_seeded_and_shared_by_backward() {
 
 #[test]
 fn add_forward_backward_and_accumulate() {
-    let shape = [2, 3, 5];
+    for shape in SHAPES {
+        add_case(shape);
+    }
+}
+
+fn add_case(shape: [usize; 4]) {
     let n: usize = shape.iter().product();
     let mut rng = Rng(6);
     let (a, b) = (f32_round(&rng.vec(n, -1.0, 1.0)), f32_round(&rng.vec(n, -1.0, 1.0)));

@@ -30,15 +30,18 @@ fn run_loss(loss: Loss, shape: &[usize], p: &[f64], t: &[f64]) -> (f64, Vec<f64>
 
 #[test]
 fn mse_forward_and_backward() {
-    let n: usize = SHAPE.iter().product();
-    let mut rng = Rng(21);
-    let (p, t) = (f32_round(&rng.vec(n, -0.5, 1.5)), f32_round(&rng.vec(n, 0.0, 1.0)));
-    let (l, dp) = run_loss(Loss::Mse, &SHAPE, &p, &t);
-    // A mean of 210 O(1) squares: f32 error ~1e-7 relative.
-    assert_close("mse forward", &[l], &[mse(&p, &t)], 1e-7, 1e-5);
-    let want = fd_grad(&p, |p| G * mse(p, &t));
-    // Gradients are O(1/n) = O(5e-3); 1e-9 absolute is far below a dropped factor.
-    assert_close("mse backward", &dp, &want, 1e-9, 1e-4);
+    // SHAPE: one value per invocation; 360 values, a multiple of 4: four per invocation.
+    for shape in [SHAPE.to_vec(), vec![2, 3, 5, 12]] {
+        let n: usize = shape.iter().product();
+        let mut rng = Rng(21);
+        let (p, t) = (f32_round(&rng.vec(n, -0.5, 1.5)), f32_round(&rng.vec(n, 0.0, 1.0)));
+        let (l, dp) = run_loss(Loss::Mse, &shape, &p, &t);
+        // A mean of <= 360 O(1) squares: f32 error ~1e-7 relative.
+        assert_close(&format!("mse forward {shape:?}"), &[l], &[mse(&p, &t)], 1e-7, 1e-5);
+        let want = fd_grad(&p, |p| G * mse(p, &t));
+        // Gradients are O(1/n) = O(3e-3); 1e-9 absolute is far below a dropped factor.
+        assert_close(&format!("mse backward {shape:?}"), &dp, &want, 1e-9, 1e-4);
+    }
 }
 
 #[test]

@@ -32,3 +32,34 @@ fn add_copy(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     if (i >= p.n) { return; }
     acc[i] = ax[i];
 }
+
+// ---- four values per invocation, for n a multiple of 4 (ops::elementwise picks these) ----
+// llvmpipe runs every storage load and store as a loop over the 8 SIMD lanes, a vec4 at about
+// the cost of a float, so these take a quarter of the scalar entries' load loops.
+@group(0) @binding(1) var<storage, read> fa4: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> fb4: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read_write> fy4: array<vec4<f32>>;
+
+@compute @workgroup_size(64)
+fn add_forward_vec4(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    if (4u * i >= p.n) { return; }
+    fy4[i] = fa4[i] + fb4[i];
+}
+
+@group(0) @binding(1) var<storage, read> ax4: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> acc4: array<vec4<f32>>;
+
+@compute @workgroup_size(64)
+fn add_accumulate_vec4(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    if (4u * i >= p.n) { return; }
+    acc4[i] = acc4[i] + ax4[i];
+}
+
+@compute @workgroup_size(64)
+fn add_copy_vec4(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    if (4u * i >= p.n) { return; }
+    acc4[i] = ax4[i];
+}

@@ -50,3 +50,27 @@ fn bce_backward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
     let inside = x >= p.eps && x <= 1.0 - p.eps;
     dpred[i] = select(0.0, dloss[0] * (q - tgt[i]) / (q * (1.0 - q)) * p.inv_n, inside);
 }
+
+// ---- four values per invocation, for n a multiple of 4 (ops::elementwise picks these) ----
+// llvmpipe runs every storage load and store as a loop over the 8 SIMD lanes, a vec4 at about
+// the cost of a float, so these take a quarter of the scalar entries' load loops.
+@group(0) @binding(1) var<storage, read> pred4: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> tgt4: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read_write> terms4: array<vec4<f32>>;
+
+@compute @workgroup_size(64)
+fn sq_diff_vec4(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    if (4u * i >= p.n) { return; }
+    let e = pred4[i] - tgt4[i];
+    terms4[i] = e * e;
+}
+
+@group(0) @binding(4) var<storage, read_write> dpred4: array<vec4<f32>>;
+
+@compute @workgroup_size(64)
+fn mse_backward_vec4(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    if (4u * i >= p.n) { return; }
+    dpred4[i] = dloss[0] * 2.0 * (pred4[i] - tgt4[i]) * p.inv_n;
+}

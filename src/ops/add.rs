@@ -44,5 +44,5 @@ pub fn reshape(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, src: &Tensor, dst: &
         return Err(crate::error::shape_err("reshape", format!("{:?} and {:?} differ in size", src.shape(), dst.shape())));
     }
     let n = src.numel();
-    gpu.dispatch(pass, SHADER, "add_copy", &Params { n: n as u32 }, &[Arg::R(src), Arg::W(dst)], crate::gpu::grid_1d(n as u64, 64)?)
+    elementwise(gpu, pass, SHADER, "add_copy", &Params { n: n as u32 }, &[Arg::R(src), Arg::W(dst)], n)
 }

@@ -85,7 +85,8 @@ impl Loss {
         let n = pred.numel();
         // Not `elementwise`: it would demand n values of the one-element `dloss` too.
         let args = [Arg::R(pred), Arg::R(target), Arg::R(dloss), Arg::W(dpred)];
-        gpu.dispatch(pass, SHADER, entry, &Self::params(n), &args, grid_1d(n as u64, 64)?)
+        let (entry, count) = super::vec4_or(entry, n);
+        gpu.dispatch(pass, SHADER, entry, &Self::params(n), &args, grid_1d(count as u64, 64)?)
     }
 }
 

@@ -48,7 +48,32 @@ pub(crate) fn elementwise<P: bytemuck::Pod>(
             }
         }
     }
-    gpu.dispatch(pass, shader, entry, params, args, grid_1d(n as u64, 64)?)
+    let (entry, count) = vec4_or(entry, n);
+    gpu.dispatch(pass, shader, entry, params, args, grid_1d(count as u64, 64)?)
+}
+
+/// `entry`'s `_vec4` twin and its invocation count where the shader has one and `n` (the
+/// values it writes) is a multiple of 4, else `entry` itself with one value an invocation.
+pub(crate) fn vec4_or(entry: &'static str, n: usize) -> (&'static str, usize) {
+    match vec4_twin(entry) {
+        Some(e4) if n.is_multiple_of(4) => (e4, n / 4),
+        _ => (entry, n),
+    }
+}
+
+/// The `_vec4` entry point that does `entry`'s work four values an invocation (their
+/// shaders say why), for n a multiple of 4.
+fn vec4_twin(entry: &str) -> Option<&'static str> {
+    Some(match entry {
+        "add_forward" => "add_forward_vec4",
+        "add_accumulate" => "add_accumulate_vec4",
+        "add_copy" => "add_copy_vec4",
+        "sigmoid_forward" => "sigmoid_forward_vec4",
+        "sigmoid_backward" => "sigmoid_backward_vec4",
+        "sq_diff" => "sq_diff_vec4",
+        "mse_backward" => "mse_backward_vec4",
+        _ => return None,
+    })
 }
 
 /// Checks that `t` has exactly `shape`, naming the op and the argument.
