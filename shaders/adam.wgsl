@@ -17,12 +17,20 @@ struct Params { n: u32, lr: f32, beta1: f32, beta2: f32, eps: f32, bc1: f32, bc2
 fn adam_step(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = gid.x + gid.y * nwg.x * 64u;
     if (i >= p.n || guard[0] != 0.0) { return; }
-    let g = grad[i];
-    let mi = p.beta1 * m[i] + (1.0 - p.beta1) * g;
-    let vi = p.beta2 * v[i] + (1.0 - p.beta2) * g * g;
-    m[i] = mi;
-    v[i] = vi;
-    param[i] -= p.lr * (mi / p.bc1) / (sqrt(vi / p.bc2) + p.eps);
+    let u = update(vec4<f32>(grad[i]), vec4<f32>(m[i]), vec4<f32>(v[i]));
+    m[i] = u.m.x;
+    v[i] = u.v.x;
+    param[i] -= u.step.x;
+}
+
+// The new moments and the step to subtract from the parameters, four at a time (the scalar
+// entry uses one lane).
+struct Update { m: vec4<f32>, v: vec4<f32>, step: vec4<f32> }
+
+fn update(g: vec4<f32>, m0: vec4<f32>, v0: vec4<f32>) -> Update {
+    let mi = p.beta1 * m0 + (1.0 - p.beta1) * g;
+    let vi = p.beta2 * v0 + (1.0 - p.beta2) * g * g;
+    return Update(mi, vi, p.lr * (mi / p.bc1) / (sqrt(vi / p.bc2) + p.eps));
 }
 
 // ---- four parameters per invocation, for n a multiple of 4 ----
@@ -38,10 +46,8 @@ fn adam_step(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
 fn adam_step_vec4(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = gid.x + gid.y * nwg.x * 64u;
     if (4u * i >= p.n || guard[0] != 0.0) { return; }
-    let g = grad4[i];
-    let mi = p.beta1 * m4[i] + (1.0 - p.beta1) * g;
-    let vi = p.beta2 * v4[i] + (1.0 - p.beta2) * g * g;
-    m4[i] = mi;
-    v4[i] = vi;
-    param4[i] -= p.lr * (mi / p.bc1) / (sqrt(vi / p.bc2) + p.eps);
+    let u = update(grad4[i], m4[i], v4[i]);
+    m4[i] = u.m;
+    v4[i] = u.v;
+    param4[i] -= u.step;
 }
