@@ -7,6 +7,7 @@
 
 mod exec;
 mod flat;
+mod optim;
 mod op;
 pub mod params;
 pub mod profile;

@@ -99,7 +99,7 @@ impl Adam {
         };
         let args = [Arg::R(grad), Arg::W(param), Arg::W(m), Arg::W(v), guard.map_or(Arg::Absent, Arg::R)];
         // Not `elementwise`: the guard is one value, not one per element.
-        let (entry, count) = if n.is_multiple_of(4) { ("adam_step_vec4", n / 4) } else { (op, n) };
+        let (entry, count) = super::vec4_or(op, n);
         gpu.dispatch(pass, SHADER, entry, &p, &args, grid_1d(count as u64, 64)?)
     }
 }

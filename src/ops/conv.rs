@@ -293,9 +293,7 @@ impl Conv {
         expect_shape(OP, "dy", dy, &g.y_shape())?;
         dispatch_backward_weight(kernel, gpu, pass, &g, x, dy, dw)
     }
-}
 
-impl Conv {
     /// The gradients `dx` and `dw` wanted (either may be `None`) from `x`, `w` and `dy` on
     /// `kernel`: [`Conv::backward_input`] and [`Conv::backward_weight`] in one call, which
     /// lets the tiled kernels pack `dy` once for both (one dispatch and one pass over dy

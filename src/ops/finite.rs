@@ -21,7 +21,8 @@ pub fn check(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, flags: &Te
     }
     let n = x.numel();
     let p = Params { n: n as u32, slot: slot as u32 };
-    let entry = if n.is_multiple_of(4) { "finite_check_vec4" } else { "finite_check" };
+    // One workgroup whatever n: only the entry point depends on it.
+    let (entry, _) = super::vec4_or("finite_check", n);
     gpu.dispatch(pass, SHADER, entry, &p, &[Arg::R(x), Arg::W(flags)], [1, 1, 1])
 }
 

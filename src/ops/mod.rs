@@ -72,6 +72,8 @@ fn vec4_twin(entry: &str) -> Option<&'static str> {
         "sigmoid_backward" => "sigmoid_backward_vec4",
         "sq_diff" => "sq_diff_vec4",
         "mse_backward" => "mse_backward_vec4",
+        "adam_step" => "adam_step_vec4",
+        "finite_check" => "finite_check_vec4",
         _ => return None,
     })
 }
