@@ -328,14 +328,14 @@ fn fast_small_channel_counts_forward_and_gradients() {
 /// packs its unfolded operands four voxels along W per load (`conv_fast_pack_tex_w4`): the
 /// forward's x and the backward passes' dy (12 wide at stride 1; 4 wide after stride 3), with
 /// channel counts that leave a part-filled quad (5 and 3 in, 7 and 6 out), 2 batch items; and
-/// its folded operands a window row per two vec4 loads.
+/// the stage its folded packings read, four voxels along W per vec4 load.
 #[test]
 fn fast_widths_a_multiple_of_four() {
     let with = |c: Case, ci: usize, co: usize, input: [usize; 3]| Case { ci, co, input, ..c };
     check_fast(with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 5, 7, [3, 5, 12]), 90);
     check_fast(with(conv2d([3, 3], [1, 1], Padding::Same), 3, 6, [1, 6, 8]), 91);
     check_fast(with(conv2d([3, 3], [1, 3], Padding::Same), 6, 5, [1, 3, 12]), 92);
-    // Folded first layers (`conv_fast_pack_folded_tex_rows`, each window row from two vec4s):
+    // Folded first layers (staged four voxels along W a texel by `conv_fast_stage_tex_w4`):
     // 5^3 stride 2 folding H and W, 1 and 4 input channels; 3^3 on 1 channel folding W only;
     // 5x5 on a 4-wide grid, whose windows run off both sides.
     check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 1, 8, [5, 6, 12]), 93);

@@ -12,10 +12,11 @@ fn every_shader_parses_and_validates() {
             continue;
         }
         let mut src = std::fs::read_to_string(&path).unwrap();
-        // A file whose first line is `// prepend: other.wgsl` is compiled after that file
-        // (the kernels bind it that way); validate it so.
-        if let Some(other) = src.lines().next().and_then(|l| l.strip_prefix("// prepend: ")) {
-            src = std::fs::read_to_string(dir.join(other.trim())).unwrap() + &src;
+        // A file whose first line is `// prepend: a.wgsl, b.wgsl` is compiled after those
+        // files, in that order (the kernels bind it that way); validate it so.
+        if let Some(others) = src.lines().next().and_then(|l| l.strip_prefix("// prepend: ")) {
+            let before: String = others.split(',').map(|o| std::fs::read_to_string(dir.join(o.trim())).unwrap()).collect();
+            src = before + &src;
         }
         // A file whose first line is `// append: WGSL` is completed at run time by a function
         // (bench_operands.wgsl: one per kind of operand); validate it with the one given.

@@ -18,6 +18,20 @@ pub enum Clock {
     Wall,
 }
 
+/// [`time_calls`] with `memo` installed as a graph run installs it: each call's scratch
+/// buffers, textures and bind groups come from the memo's pools and go back when the call
+/// ends, so after the first sample nothing is created while timed (a fresh scratch texture
+/// per call cost the 1->8 first layer's forward ~8 ms of lazy initialisation on lavapipe).
+pub fn time_calls_reusing(gpu: &Gpu, memo: &mut crate::gpu::Memo, clock: Clock, calls: u32, record: &mut Record) -> Result<f64> {
+    gpu.recording(memo, || {
+        time_calls(gpu, clock, calls, &mut |p| {
+            let r = record(p);
+            crate::gpu::op_done();
+            r
+        })
+    })
+}
+
 /// Times `calls` calls of `record`, all recorded into one pass of one submit, and returns
 /// milliseconds per call. Several calls per pass amortise the submit and wait (0.1-0.5 ms
 /// on lavapipe) when `Clock::Wall` is used, and pass begin/end costs with timestamps.

@@ -3,6 +3,7 @@
 
 use clap::Args;
 use rendernet::bench::{self, Clock};
+use rendernet::gpu::Memo;
 use rendernet::ops::conv::{Conv, ConvKernel, Padding, Pass};
 use rendernet::ops::conv_transpose::ConvTranspose;
 use rendernet::ops::projection;
@@ -306,18 +307,20 @@ pub fn run(a: BenchArgs) -> Result<()> {
         let group = &mut all[i..j];
         // Warm-up call: compiles the pipelines (llvmpipe compiles at first dispatch) and sizes
         // the sample so each lasts ~200 ms.
+        // Each case keeps a memo, as a graph does: timed calls reuse scratch and bind groups.
+        let mut memos: Vec<Memo> = group.iter().map(|_| Memo::default()).collect();
         let mut calls = Vec::new();
-        for c in group.iter_mut() {
+        for (c, memo) in group.iter_mut().zip(&mut memos) {
             let (g, rec) = (&gpu, &mut c.record);
-            bench::time_calls(&gpu, clock, 1, &mut |p| rec(g, p))?;
-            let once = bench::time_calls(&gpu, clock, 1, &mut |p| rec(g, p))?;
+            bench::time_calls_reusing(&gpu, memo, clock, 1, &mut |p| rec(g, p))?;
+            let once = bench::time_calls_reusing(&gpu, memo, clock, 1, &mut |p| rec(g, p))?;
             calls.push(bench::calls_for(once, 200.0));
         }
         let mut samples = vec![Vec::new(); group.len()];
         for _ in 0..a.repeat.max(1) {
             for (k, c) in group.iter_mut().enumerate() {
                 let (g, rec) = (&gpu, &mut c.record);
-                samples[k].push(bench::time_calls(&gpu, clock, calls[k], &mut |p| rec(g, p))?);
+                samples[k].push(bench::time_calls_reusing(&gpu, &mut memos[k], clock, calls[k], &mut |p| rec(g, p))?);
             }
         }
         for (k, c) in group.iter().enumerate() {

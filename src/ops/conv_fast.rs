@@ -8,8 +8,9 @@ use crate::error::Result;
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
 const SHADER: Shader = wgsl!("conv_fast");
-/// The texture family: `conv_tex.wgsl` uses `conv_fast.wgsl`'s parameters and helpers.
-const TEX_SHADER: Shader = wgsl!("conv_tex": "conv_fast", "conv_tex");
+/// The texture family: `conv_tex.wgsl` uses `conv_fast.wgsl`'s parameters and helpers, and
+/// `conv_direct.wgsl` (the first layer's direct forward) both files'.
+const TEX_SHADER: Shader = wgsl!("conv_tex": "conv_fast", "conv_tex", "conv_direct");
 
 /// The tiled kernels' parameters for dispatch geometry `g` with `cpad` packed channels.
 fn params(g: &Geometry, cpad: usize) -> Params {
@@ -219,6 +220,12 @@ fn textures_fit(gpu: &Gpu, ops: Operands, g: &Geometry, cpad: usize) -> bool {
     textures_wanted(gpu, ops) && x_texture_fits(gpu, g.n, cpad, g.input) && w_texture_fits(gpu, g, cpad)
 }
 
+/// Whether `x` of the unfolded `g` fits the stage texture its folded packing reads (`stage_x`;
+/// nothing is staged without a fold).
+fn stage_fits(gpu: &Gpu, g: &Geometry, f: &Folded) -> bool {
+    f.fold() == 1 || x_texture_fits(gpu, g.n, 4 * g.ci, g.input)
+}
+
 /// `x` packed as the texture kernels read it (see `conv_fast_pack_folded_tex`), or as a buffer.
 fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded, x: &Tensor, cpad: usize, tex: bool) -> Result<Packed> {
     if !tex {
@@ -235,10 +242,23 @@ fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded,
         let grid = [(ih * iw / 4).div_ceil(64) as u32, id as u32, zq];
         gpu.dispatch(pass, TEX_SHADER, "conv_fast_pack_tex_w4", &p, &args, grid)?;
     } else {
-        let grid = [(ih * iw).div_ceil(64) as u32, id as u32, zq];
+        let stage = stage_x(gpu, pass, g, x, &p)?;
+        let args = [Arg::ReadStorageTexture(&stage, dim), Arg::StorageTexture(&view, dim)];
+        let grid = [(ih * iw).div_ceil(64) as u32, id as u32, g.n as u32];
         gpu.dispatch(pass, TEX_SHADER, "conv_fast_pack_folded_tex", &p, &args, grid)?;
     }
     Ok(Packed::Texture(view, dim))
+}
+
+/// `x` copied into a 3D texture of 4 voxels along W a texel, which the folded texture packing
+/// reads instead of `x` (see `conv_fast_stage_tex`); `p` are the folded packing's parameters.
+fn stage_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor, p: &Params) -> Result<wgpu::TextureView> {
+    let [id, ih, iw] = g.input;
+    let (view, dim) = texture(gpu, [iw.div_ceil(4), ih, g.n * g.ci * id], wgpu::TextureDimension::D3);
+    let entry = if iw % 4 == 0 { "conv_fast_stage_tex_w4" } else { "conv_fast_stage_tex" };
+    let grid = [(iw.div_ceil(4) * ih).div_ceil(64) as u32, id as u32, (g.n * g.ci) as u32];
+    gpu.dispatch(pass, TEX_SHADER, entry, p, &[Arg::R(x), Arg::StorageTexture(&view, dim)], grid)?;
+    Ok(view)
 }
 
 /// Weights packed for the packing parameters `p` (see `pack_weights`), as a texture or buffer.
@@ -300,11 +320,27 @@ pub(crate) fn forward(
 ) -> Result<()> {
     let f = fold(g, 4);
     let cpad = f.g.ci.div_ceil(4) * 4;
-    let tex = textures_fit(gpu, ops, &f.g, cpad);
+    let tex = textures_fit(gpu, ops, &f.g, cpad) && stage_fits(gpu, g, &f);
+    if tex && f.fold() > 1 && textures_fit(gpu, ops, g, g.ci.div_ceil(4) * 4) {
+        return forward_direct(gpu, pass, g, x, w, b, y);
+    }
     let xp = pack_x(gpu, pass, g, &f, x, cpad, tex)?;
     let p = params(&f.g, cpad);
     let wp = pack_w(gpu, pass, Params { fold: f.fold() as u32, ..p }, w, tex)?;
     forward_packed(gpu, pass, p, &xp, &wp, b, y)
+}
+
+/// `forward` of a conv the texture family would fold (few input channels) without folding:
+/// the input staged four voxels along W a texel, read in place by `conv_direct_forward`.
+fn forward_direct(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor, w: &Tensor, b: Option<&Tensor>, y: &Tensor) -> Result<()> {
+    let cpad = g.ci.div_ceil(4) * 4;
+    let p = params(g, cpad);
+    let stage = stage_x(gpu, pass, g, x, &p)?;
+    let wp = pack_w(gpu, pass, p, w, true)?;
+    let tiles = g.n * g.co.div_ceil(8) * volume([g.output[0], g.output[1].div_ceil(8), g.output[2].div_ceil(8)]);
+    let p = Params { has_bias: b.is_some() as u32, total: tiles as u32, ..p };
+    let args = [Arg::ReadStorageTexture(&stage, wgpu::TextureViewDimension::D3), wp.arg(), b.map_or(Arg::Absent, Arg::R), Arg::W(y)];
+    gpu.dispatch(pass, TEX_SHADER, "conv_direct_forward", &p, &args, grid_1d(tiles as u64 * 8, 64)?)
 }
 
 /// One output phase `r` of a backward-input conv along one axis (see the shader header):
@@ -455,7 +491,10 @@ fn weight_textures(gpu: &Gpu, g: &Geometry, ops: Operands) -> Option<(Folded, us
     let cpad = f.g.ci.div_ceil(4) * 4;
     let copad = g.co.div_ceil(16) * 16;
     // Two activation textures (x folded, dy) and no weight texture.
-    let fits = textures_wanted(gpu, ops) && x_texture_fits(gpu, g.n, cpad, f.g.input) && x_texture_fits(gpu, g.n, copad, g.output);
+    let fits = textures_wanted(gpu, ops)
+        && x_texture_fits(gpu, g.n, cpad, f.g.input)
+        && x_texture_fits(gpu, g.n, copad, g.output)
+        && stage_fits(gpu, g, &f);
     fits.then(|| (f, cpad, dy_tex_channels(g)))
 }
 
