@@ -305,14 +305,17 @@ fn fast_backward_input_by_phase() {
 
 /// The tiled kernels at channel counts that are not multiples of their tile (inputs padded to
 /// 4, outputs to 16 with zeros; the texture family's 4- and 8-channel tiles): 1, 2, 3, 4, 5 in
-/// and 1, 3, 5, 7, 8 out, conv and transposed, including the first layer's shapes (3D, 1 or 4
-/// input channels to 8, 5^3 stride 2) and the 1- and 3-channel heads.
+/// and 1, 3, 5, 7, 8, 20 out, conv and transposed, including the first layer's shapes (3D, 1 or
+/// 4 input channels to 8 or 20, 5^3 stride 2: the texture family's direct kernels) and the 1-
+/// and 3-channel heads.
 #[test]
 fn fast_small_channel_counts_forward_and_gradients() {
     let with = |c: Case, ci: usize, co: usize| Case { ci, co, ..c };
     check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 1, 3), 60);
     check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 1, 8), 58);
     check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 4, 7), 59);
+    // 20 out: three groups of 8 output channels in the direct kernels, over two of 16.
+    check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 1, 20), 57);
     check_fast(with(conv3d([3, 3, 3], [2, 1, 1], Padding::Same), 2, 1), 61);
     check_fast(with(conv3d([3, 2, 3], [1, 2, 1], explicit([1, 0, 2], [0, 1, 1])), 5, 5), 62);
     check_fast(with(conv2d([3, 3], [1, 1], Padding::Same), 3, 1), 63);
@@ -324,19 +327,43 @@ fn fast_small_channel_counts_forward_and_gradients() {
     check_fast(with(transposed3d([3, 2, 3], [1, 2, 2], explicit([1, 0, 2], [0, 1, 1]), None), 3, 3), 69);
 }
 
+/// The texture family's direct kernels (`conv_direct_forward`, `conv_direct_backward_weight`),
+/// which run the convs the other families fold (few input channels), forced onto textures:
+/// 20 output channels (three groups of 8 over two of 16) at a width of 7 (the stage's scalar
+/// path); 2 input channels, a 3x7 kernel at stride (1, 2) with explicit padding (two chunks of
+/// 4 W taps) at width 12 (the stage's vec4 path); 3 output channels (dy packed 4 to a texel).
+#[test]
+fn direct_kernels_of_few_input_channels() {
+    let with = |c: Case, ci: usize, co: usize, input: [usize; 3]| Case { ci, co, input, kernel: ConvKernel::Texture, ..c };
+    check(&with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 1, 20, [5, 6, 7]), 97);
+    check(&with(conv2d([3, 7], [1, 2], Padding::explicit_2d([1, 2], [1, 4])), 2, 6, [1, 6, 12]), 98);
+    check(&with(conv3d([3, 3, 3], [2, 1, 1], Padding::Same), 1, 3, [4, 5, 9]), 99);
+}
+
+/// The texture family's 4-channel tiles (`conv_fast_forward_tex4`, `..._backward_weight_tex4`)
+/// on heads with enough input channels not to fold (8 -> 3, 16 -> 1, 3x3), forced onto
+/// textures: with fewer input channels the direct kernels run instead.
+#[test]
+fn texture_heads_of_at_most_four_output_channels() {
+    let with = |c: Case, ci: usize, co: usize, input: [usize; 3]| Case { ci, co, input, kernel: ConvKernel::Texture, ..c };
+    check(&with(conv2d([3, 3], [1, 1], Padding::Same), 8, 3, [1, 5, 9]), 88);
+    check(&with(conv2d([3, 3], [1, 1], Padding::Same), 16, 1, [1, 6, 7]), 89);
+}
+
 /// Widths that are multiples of 4 (12 and 8, not powers of two), where the texture family
 /// packs its unfolded operands four voxels along W per load (`conv_fast_pack_tex_w4`): the
 /// forward's x and the backward passes' dy (12 wide at stride 1; 4 wide after stride 3), with
 /// channel counts that leave a part-filled quad (5 and 3 in, 7 and 6 out), 2 batch items; and
-/// the stage its folded packings read, four voxels along W per vec4 load.
+/// the first layers' input as the direct kernels stage it, four voxels along W per vec4 load.
 #[test]
 fn fast_widths_a_multiple_of_four() {
     let with = |c: Case, ci: usize, co: usize, input: [usize; 3]| Case { ci, co, input, ..c };
     check_fast(with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 5, 7, [3, 5, 12]), 90);
     check_fast(with(conv2d([3, 3], [1, 1], Padding::Same), 3, 6, [1, 6, 8]), 91);
     check_fast(with(conv2d([3, 3], [1, 3], Padding::Same), 6, 5, [1, 3, 12]), 92);
-    // Folded first layers (staged four voxels along W a texel by `conv_fast_stage_tex_w4`):
-    // 5^3 stride 2 folding H and W, 1 and 4 input channels; 3^3 on 1 channel folding W only;
+    // First layers (`conv_direct_*` on the input staged by `conv_fast_stage_tex_w4`), which the
+    // other families fold: 5^3 stride 2 folding H and W, 1 and 4 input channels; 3^3 on 1
+    // channel folding W only;
     // 5x5 on a 4-wide grid, whose windows run off both sides.
     check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 1, 8, [5, 6, 12]), 93);
     check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 4, 7, [3, 7, 8]), 94);

@@ -1,16 +1,48 @@
 // prepend: conv_fast.wgsl, conv_tex.wgsl
-// The direct forward of convs with few input channels (the first layer: 1 -> 8, 5^3, stride 2),
-// where the texture family otherwise folds kernel taps into channels (conv_fast_pack_folded_tex).
-// That packing wrote kh * kw / (sh * sw) texels per input value, each assembled lane by lane,
-// and took more time than the conv itself (1->8 5^3 s2 on 64^3 on lavapipe 22.3 / AMD Zen 3:
-// ~9.5 of ~19 ms). Here each lane reads the input where it is: the stage texture of
-// conv_fast_stage_tex (4 voxels along W a texel), two texels per window row and chunk of 4 W
-// taps, picks the 4 values of its own window with vector selects, and multiplies them by the
-// 8 output channels' weights, fetched one texel a lane and broadcast by subgroup shuffles.
-// Tiles are the texture family's (a subgroup of 8 lanes = 8 outputs along W, 8 rows each),
-// over groups of 8 output channels. Compiled appended to conv_fast.wgsl and conv_tex.wgsl
-// (their Params, lane_tile, Acc8, mac8, bias4 and put_raw); binds the stage as `tx` and the
-// unfolded packed weights (conv_fast_pack_weights_tex) as `tw`.
+// The direct kernels of convs with few input channels (the first layer: 1 -> 8, 5^3, stride 2),
+// which the buffer family runs with kernel taps folded into channels (and the texture family
+// did, until the folded packing proved the slow part): that packing writes about kh * kw / (sh * sw) texels per
+// input value, each assembled lane by lane, and took as long as the conv itself (1->8 5^3 s2 on
+// 64^3, lavapipe 22.3 / AMD Zen 3: ~9.5 of ~19 ms forward). Here each lane reads the input where
+// it is, in the stage texture below: two texels per window row and chunk of 4 W taps, its own 4
+// values picked with vector selects. The forward multiplies them by 8 output channels' weights,
+// fetched one texel a lane and broadcast by subgroup shuffles, over the texture family's tiles
+// (a subgroup of 8 lanes = 8 outputs along W, 8 rows each) per group of 8 output channels; the
+// weight gradient multiplies them by the lane's own dy. Compiled appended to conv_fast.wgsl and
+// conv_tex.wgsl (their Params, lane_tile, Acc8, mac8, bias4, put_raw, chunk_rows and bindings).
+
+// ---- the stage: the input, 4 voxels along W a texel ----------------------------------------
+// Stage texel (j, h, (n * ci + c) * id + d) holds x[n, c, d, h, 4j..4j+3] (zero past iw): the
+// kernels below read their operand as texels (a storage-buffer load is a loop over the 8 lanes
+// on llvmpipe 22.3: 67 ns per 8-lane vector on a Zen 3, a storage-texture texel 9 ns,
+// `rendernet bench --operands`). Written from `src` with one vec4 load per texel when iw is a
+// multiple of 4 (conv_fast_stage_tex_w4), else four scalar ones. Dispatched as
+// (ceil(ceil(iw / 4) * ih / 64), id, n * ci); parameters the conv's (n, ci, id, ih, iw).
+fn stage_pos(gid: vec3<u32>) -> vec4<u32> {
+    let w4n = (p.iw + 3u) / 4u;
+    // (j, h, layer, valid)
+    return vec4<u32>(gid.x % w4n, gid.x / w4n, gid.z * p.id + gid.y, u32(gid.x < w4n * p.ih));
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_stage_tex(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let s = stage_pos(gid);
+    if (s.w == 0u) { return; }
+    let row = (s.z * p.ih + s.y) * p.iw;
+    var v = vec4<f32>(0.0);
+    for (var k = 0u; k < 4u; k++) {
+        let w = 4u * s.x + k;
+        if (w < p.iw) { v[k] = src[row + w]; }
+    }
+    textureStore(tdst, s.xyz, v);
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_stage_tex_w4(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let s = stage_pos(gid);
+    if (s.w == 0u) { return; }
+    textureStore(tdst, s.xyz, src4[(s.z * p.ih + s.y) * (p.iw / 4u) + s.x]);
+}
 
 // Texel j (W voxels 4j..4j+3) of row zh at depth zd of input channel c of item n in the stage,
 // zero off the grid.
@@ -101,4 +133,101 @@ fn conv_direct_forward(ids: LaneIds) {
     }
     put_direct(t, 0u, a0); put_direct(t, 1u, a1); put_direct(t, 2u, a2); put_direct(t, 3u, a3);
     put_direct(t, 4u, a4); put_direct(t, 5u, a5); put_direct(t, 6u, a6); put_direct(t, 7u, a7);
+}
+
+// ---- weight gradient: lanes = 8 output columns; each lane 4 W taps x 8 output channels ----
+// dw[o, c, kd, kh, kw] = Σ dy[n, o, od, oh, ow] x[n, c, od*sd - pd + kd, oh*sh - ph + kh,
+// ow*sw - pw + kw]. A tile is (chunk of output rows, column = (kd, c, kh, chunk of 4 W taps,
+// group of 8 output channels)); its 8 lanes walk the chunk's rows 8 output columns at a time,
+// each reading its own window (taps4, two stage texels) and its own 8 dy values (two texels of
+// the dy texture of conv_fast_pack_tex(_w4): dq quads per voxel),
+// then the tile's lanes are summed by a shuffle-xor butterfly and written to
+// part[chunk][tap][cpad][co16 * 16] for conv_fast_weight_sum (fold 1). No folded packing: the
+// first layer's (1->8 5^3 s2 on 64^3) took about as long as the gradient itself.
+// Params: the conv's geometry; cpad = ceil(ci / 4) * 4; nchunks, chunk (rows per chunk),
+// total = tiles.
+struct Acc32 { lo: array<vec4<f32>, 4>, hi: array<vec4<f32>, 4> }
+
+fn bw_direct_step(acc: Acc32, x: vec4<f32>, dlo: vec4<f32>, dhi: vec4<f32>) -> Acc32 {
+    return Acc32(
+        array<vec4<f32>, 4>(acc.lo[0] + x.x * dlo, acc.lo[1] + x.y * dlo, acc.lo[2] + x.z * dlo, acc.lo[3] + x.w * dlo),
+        array<vec4<f32>, 4>(acc.hi[0] + x.x * dhi, acc.hi[1] + x.y * dhi, acc.hi[2] + x.z * dhi, acc.hi[3] + x.w * dhi));
+}
+
+// The sum of v over the 8 lanes of a tile (aligned groups of 8 in the subgroup).
+fn tile_sum(v: vec4<f32>) -> vec4<f32> {
+    let a = v + subgroupShuffleXor(v, 1u);
+    let b = a + subgroupShuffleXor(a, 2u);
+    return b + subgroupShuffleXor(b, 4u);
+}
+
+// Column of a weight-gradient tile: (kd, c, kh, first W tap, group of 8 output channels).
+struct DirectColumn { kd: u32, c: u32, kh: u32, kw0: u32, g: u32 }
+
+fn direct_column(col: u32) -> DirectColumn {
+    let groups = (p.co + 7u) / 8u;
+    let nkw = (p.kw + 3u) / 4u;
+    var r = col;
+    let g = r % groups; r /= groups;
+    let kw0 = (r % nkw) * 4u; r /= nkw;
+    let kh = r % p.kh; r /= p.kh;
+    return DirectColumn(r / p.ci, r % p.ci, kh, kw0, g);
+}
+
+@compute @workgroup_size(64)
+fn conv_direct_backward_weight(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    if (tl.x >= p.total) { return; }
+    let lane = tl.y;
+    let cols = p.kd * p.ci * p.kh * ((p.kw + 3u) / 4u) * ((p.co + 7u) / 8u);
+    let k = direct_column(tl.x % cols);
+    let chunk = tl.x / cols;
+    let span = chunk_rows(chunk);
+    // dy texels per voxel: 1 for the 4-channel packing, else co16 * 4.
+    let dq = select(p.co16 * 4u, 1u, p.co <= 4u);
+    let q1 = min(2u * k.g + 1u, dq - 1u);
+    let has_hi = 2u * k.g + 1u < dq;
+    var acc: Acc32;
+    // Row counters (n, od, oh), advanced without dividing.
+    var oh = span.x % p.oh;
+    var od = (span.x / p.oh) % p.od;
+    var n = span.x / (p.oh * p.od);
+    for (var row = span.x; row < span.y; row++) {
+        let zd = i32(od * p.sd + k.kd) - i32(p.pd);
+        let zh = i32(oh * p.sh + k.kh) - i32(p.ph);
+        if (zd >= 0 && zd < i32(p.id) && zh >= 0 && zh < i32(p.ih)) {
+            let dz0 = i32((n * dq + 2u * k.g) * p.od + od);
+            let dz1 = i32((n * dq + q1) * p.od + od);
+            for (var ow0 = 0u; ow0 < p.ow; ow0 += 8u) {
+                let ow = ow0 + lane;
+                let ok = ow < p.ow;
+                let dc = vec2<i32>(i32(min(ow, p.ow - 1u)), i32(oh));
+                let dlo = select(vec4<f32>(0.0), textureLoad(bdy, vec3<i32>(dc, dz0)), ok);
+                let dhi = select(vec4<f32>(0.0), textureLoad(bdy, vec3<i32>(dc, dz1)), ok && has_hi);
+                let x = taps4(n, k.c, zd, zh, i32(ow * p.sw + k.kw0) - i32(p.pw));
+                acc = bw_direct_step(acc, x, dlo, dhi);
+            }
+        }
+        oh += 1u;
+        if (oh == p.oh) { oh = 0u; od += 1u; }
+        if (od == p.od) { od = 0u; n += 1u; }
+    }
+    // Lane l writes tap kw0 + l / 2, output channels g * 8 + 4 * (l % 2)..+3.
+    var mine = vec4<f32>(0.0);
+    for (var kk = 0u; kk < 4u; kk++) {
+        let lo = tile_sum(acc.lo[kk]);
+        let hi = tile_sum(acc.hi[kk]);
+        mine = select(mine, lo, lane == 2u * kk);
+        mine = select(mine, hi, lane == 2u * kk + 1u);
+    }
+    let kw = k.kw0 + lane / 2u;
+    if (kw >= p.kw) { return; }
+    let taps = p.kd * p.kh * p.kw;
+    let tap = (k.kd * p.kh + k.kh) * p.kw + kw;
+    let copad = p.co16 * 16u;
+    let o = ((chunk * taps + tap) * p.cpad + k.c) * copad + k.g * 8u + 4u * (lane & 1u);
+    bpart[o] = mine.x;
+    bpart[o + 1u] = mine.y;
+    bpart[o + 2u] = mine.z;
+    bpart[o + 3u] = mine.w;
 }

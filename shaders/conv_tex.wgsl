@@ -1,7 +1,7 @@
 // prepend: conv_fast.wgsl
 // The texture family of the tiled conv kernels: operands read through textures, shared
 // across lanes by subgroup shuffles. Compiled appended to conv_fast.wgsl (src/ops/conv_fast.rs
-// builds the module from both), whose parameter block, packing helpers (src_at, folded_at,
+// builds the module from both), whose parameter block, packing helper (src_at,
 // packed_weight) and output writer (put) it uses.
 //
 // Why (measured on lavapipe 22.3 / LLVM 15, `rendernet bench`, see README "Benchmarks"):
@@ -26,86 +26,35 @@ fn tex_pos(n: u32, q: u32, d: u32, h: u32, w: u32) -> vec3<u32> {
     return vec3<u32>(w, h, (n * (p.cpad / 4u) + q) * p.od + d);
 }
 
-// The folded packing reads a staged copy of its source, not the source buffer: a storage-buffer
-// load is a loop over the 8 lanes on llvmpipe 22.3 (67 ns per 8-lane vector on a Zen 3, a
-// storage-texture texel 9 ns: `rendernet bench --operands`), and each source value is read by
-// ~kh * kw / (sh * sw) folded texels. Stage texel (j, h, (n * ci + c) * id + d) holds
-// x[n, c, d, h, 4j..4j+3] (zero past iw), written by conv_fast_stage_tex(_w4) from `src` with
-// one vec4 load per texel when iw is a multiple of 4. Dispatched as
-// (ceil(ceil(iw / 4) * ih / 64), id, n * ci); parameters those of the folded packing.
+// Packing x ([N, C, id, ih, iw], binding 1 `src`) for the texture kernels (texel = 4 channels
+// of one voxel, channels past C zero). Params: n, ci = C, od/oh/ow = the source size, cpad.
+// Convs with few input channels, which the buffer family folds, run conv_direct.wgsl's kernels
+// on the unpacked input instead, so this packing never folds. One invocation per texel,
+// dispatched as (ceil(oh * ow / 64), od, n * cq): depth and (item, quad) come from the
+// workgroup grid, leaving one division (by ow) per invocation (integer division is scalarised
+// per lane on llvmpipe).
 @group(0) @binding(2) var tdst: texture_storage_3d<rgba32float, write>;
-@group(0) @binding(1) var<storage, read> src4: array<vec4<f32>>;
-
-fn stage_pos(gid: vec3<u32>) -> vec4<u32> {
-    let w4n = (p.iw + 3u) / 4u;
-    // (j, h, layer, valid)
-    return vec4<u32>(gid.x % w4n, gid.x / w4n, gid.z * p.id + gid.y, u32(gid.x < w4n * p.ih));
-}
 
 @compute @workgroup_size(64)
-fn conv_fast_stage_tex(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let s = stage_pos(gid);
-    if (s.w == 0u) { return; }
-    let row = (s.z * p.ih + s.y) * p.iw;
-    var v = vec4<f32>(0.0);
-    for (var k = 0u; k < 4u; k++) {
-        let w = 4u * s.x + k;
-        if (w < p.iw) { v[k] = src[row + w]; }
-    }
-    textureStore(tdst, s.xyz, v);
-}
-
-@compute @workgroup_size(64)
-fn conv_fast_stage_tex_w4(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let s = stage_pos(gid);
-    if (s.w == 0u) { return; }
-    textureStore(tdst, s.xyz, src4[(s.z * p.ih + s.y) * (p.iw / 4u) + s.x]);
-}
-
-// Folded channel k of destination voxel (n, d) whose window starts at (h0, w0), read from the
-// stage texture `tx` (folded_at's value).
-fn staged_at(n: u32, k: vec3<u32>, d: u32, h0: i32, w0: i32) -> f32 {
-    let h = h0 + i32(k.y);
-    let w = w0 + i32(k.z);
-    let ok = k.x < p.ci && h >= 0 && h < i32(p.ih) && w >= 0 && w < i32(p.iw);
-    let hc = clamp(h, 0, i32(p.ih) - 1);
-    let wc = clamp(w, 0, i32(p.iw) - 1);
-    let layer = i32((n * p.ci + min(k.x, p.ci - 1u)) * p.id + d);
-    let v = textureLoad(tx, vec3<i32>(wc / 4, hc, layer));
-    return select(0.0, v[wc % 4], ok);
-}
-
-// Same parameters as conv_fast_pack_folded. One invocation per destination voxel, writing its
-// cq texels, dispatched as (ceil(oh * ow / 64), od, n): depth and item come from the
-// workgroup grid and the folded channel is walked with fold_next, leaving one division (by
-// ow) per voxel. Integer division by a runtime value is scalarised per lane on llvmpipe (15 ns
-// per 8-lane vector on a Zen 3, `rendernet bench --operands`); one invocation per texel paid
-// eight of them per texel and took ~2.5x as long on the 1->8 first layer.
-@compute @workgroup_size(64)
-fn conv_fast_pack_folded_tex(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn conv_fast_pack_tex(@builtin(global_invocation_id) gid: vec3<u32>) {
     let hw = gid.x;
     if (hw >= p.oh * p.ow) { return; }
-    let w = hw % p.ow;
-    let h = hw / p.ow;
-    let d = gid.y;
-    let n = gid.z;
-    let h0 = i32(h * p.sh) - i32(p.ph);
-    let w0 = i32(w * p.sw) - i32(p.pw);
-    var k = vec3<u32>(0u);
-    for (var q = 0u; q < p.cpad / 4u; q++) {
-        let k0 = k; let k1 = fold_next(k0); let k2 = fold_next(k1); let k3 = fold_next(k2);
-        k = fold_next(k3);
-        let v = vec4<f32>(staged_at(n, k0, d, h0, w0), staged_at(n, k1, d, h0, w0),
-                          staged_at(n, k2, d, h0, w0), staged_at(n, k3, d, h0, w0));
-        textureStore(tdst, tex_pos(n, q, d, h, w), v);
-    }
+    let cq = p.cpad / 4u;
+    let n = gid.z / cq;
+    let c = 4u * (gid.z % cq);
+    let s_len = p.od * p.oh * p.ow;
+    let s = gid.y * p.oh * p.ow + hw;
+    let v = vec4<f32>(src_at(n, c, s, s_len, true), src_at(n, c + 1u, s, s_len, true),
+                      src_at(n, c + 2u, s, s_len, true), src_at(n, c + 3u, s, s_len, true));
+    textureStore(tdst, tex_pos(n, gid.z % cq, gid.y, hw / p.ow, hw % p.ow), v);
 }
 
-// The plain packing (no fold) when iw is a multiple of 4: each invocation reads one channel
+// The same packing when iw is a multiple of 4: each invocation reads one channel
 // quad at 4 consecutive voxels along W as 4 vec4 loads and writes their 4 texels. A storage
 // load on llvmpipe 22.3 is a loop over the 8 lanes (a vec4 costs about what a float does), so
 // this takes a quarter of the per-texel kernel's load loops. Dispatched as (ceil(oh * ow / 256),
 // od, n * cq); same parameters (od/oh/ow the destination, equal to the source's).
+@group(0) @binding(1) var<storage, read> src4: array<vec4<f32>>;
 
 // Channel c of item n at vec4 index s4 of its plane (4 voxels along W), zero past ci.
 fn src_quad(n: u32, c: u32, s4: u32, plane4: u32) -> vec4<f32> {

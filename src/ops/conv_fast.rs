@@ -220,38 +220,34 @@ fn textures_fit(gpu: &Gpu, ops: Operands, g: &Geometry, cpad: usize) -> bool {
     textures_wanted(gpu, ops) && x_texture_fits(gpu, g.n, cpad, g.input) && w_texture_fits(gpu, g, cpad)
 }
 
-/// Whether `x` of the unfolded `g` fits the stage texture its folded packing reads (`stage_x`;
-/// nothing is staged without a fold).
-fn stage_fits(gpu: &Gpu, g: &Geometry, f: &Folded) -> bool {
-    f.fold() == 1 || x_texture_fits(gpu, g.n, 4 * g.ci, g.input)
+/// Whether the conv `g` runs the direct texture kernels for `ops`: a conv the texture family
+/// would fold (few input channels), whose staged input (`stage_x`) and unfolded packed
+/// weights fit the device's textures.
+fn direct_fits(gpu: &Gpu, ops: Operands, g: &Geometry, f: &Folded) -> bool {
+    f.fold() > 1 && textures_fit(gpu, ops, g, g.ci.div_ceil(4) * 4) && x_texture_fits(gpu, g.n, 4 * g.ci, g.input)
 }
 
-/// `x` packed as the texture kernels read it (see `conv_fast_pack_folded_tex`), or as a buffer.
+/// `x` packed as the texture kernels read it (see `conv_fast_pack_tex`; never folded: a fold
+/// runs the direct kernels), or as a buffer (folded by `f`).
 fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded, x: &Tensor, cpad: usize, tex: bool) -> Result<Packed> {
     if !tex {
         return Ok(Packed::Buffer(pack_folded(gpu, pass, g, f, x, cpad)?));
     }
-    let [id, ih, iw] = f.g.input;
+    debug_assert_eq!(f.fold(), 1, "the texture packing does not fold");
+    let [id, ih, iw] = g.input;
     let (view, dim) = texture(gpu, [iw, ih, g.n * cpad / 4 * id], wgpu::TextureDimension::D3);
-    // Without a fold the folded packing's parameters make it the plain packing.
-    let p = folded_params(g, f, cpad);
+    let p = folded_params(g, &Folded::none(*g), cpad);
     let args = [Arg::R(x), Arg::StorageTexture(&view, dim)];
     // Grids: (h, w) or (h, w / 4) along x, depth along y, (item, channel quad) along z.
     let zq = (g.n * cpad / 4) as u32;
-    if f.fold() == 1 && iw % 4 == 0 {
-        let grid = [(ih * iw / 4).div_ceil(64) as u32, id as u32, zq];
-        gpu.dispatch(pass, TEX_SHADER, "conv_fast_pack_tex_w4", &p, &args, grid)?;
-    } else {
-        let stage = stage_x(gpu, pass, g, x, &p)?;
-        let args = [Arg::ReadStorageTexture(&stage, dim), Arg::StorageTexture(&view, dim)];
-        let grid = [(ih * iw).div_ceil(64) as u32, id as u32, g.n as u32];
-        gpu.dispatch(pass, TEX_SHADER, "conv_fast_pack_folded_tex", &p, &args, grid)?;
-    }
+    let (entry, per) = if iw % 4 == 0 { ("conv_fast_pack_tex_w4", 4) } else { ("conv_fast_pack_tex", 1) };
+    let grid = [(ih * iw / per).div_ceil(64) as u32, id as u32, zq];
+    gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid)?;
     Ok(Packed::Texture(view, dim))
 }
 
-/// `x` copied into a 3D texture of 4 voxels along W a texel, which the folded texture packing
-/// reads instead of `x` (see `conv_fast_stage_tex`); `p` are the folded packing's parameters.
+/// `x` ([N, C, input...] of `g`) copied into a 3D texture of 4 voxels along W a texel, which
+/// the direct kernels read (see `conv_direct.wgsl`); `p` has `g`'s sizes.
 fn stage_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor, p: &Params) -> Result<wgpu::TextureView> {
     let [id, ih, iw] = g.input;
     let (view, dim) = texture(gpu, [iw.div_ceil(4), ih, g.n * g.ci * id], wgpu::TextureDimension::D3);
@@ -320,10 +316,11 @@ pub(crate) fn forward(
 ) -> Result<()> {
     let f = fold(g, 4);
     let cpad = f.g.ci.div_ceil(4) * 4;
-    let tex = textures_fit(gpu, ops, &f.g, cpad) && stage_fits(gpu, g, &f);
-    if tex && f.fold() > 1 && textures_fit(gpu, ops, g, g.ci.div_ceil(4) * 4) {
+    if direct_fits(gpu, ops, g, &f) {
         return forward_direct(gpu, pass, g, x, w, b, y);
     }
+    // A fold on textures runs the direct kernels or nothing: the texture packing never folds.
+    let tex = textures_fit(gpu, ops, &f.g, cpad) && f.fold() == 1;
     let xp = pack_x(gpu, pass, g, &f, x, cpad, tex)?;
     let p = params(&f.g, cpad);
     let wp = pack_w(gpu, pass, Params { fold: f.fold() as u32, ..p }, w, tex)?;
@@ -490,11 +487,9 @@ fn weight_textures(gpu: &Gpu, g: &Geometry, ops: Operands) -> Option<(Folded, us
     let f = fold(g, 4);
     let cpad = f.g.ci.div_ceil(4) * 4;
     let copad = g.co.div_ceil(16) * 16;
-    // Two activation textures (x folded, dy) and no weight texture.
-    let fits = textures_wanted(gpu, ops)
-        && x_texture_fits(gpu, g.n, cpad, f.g.input)
-        && x_texture_fits(gpu, g.n, copad, g.output)
-        && stage_fits(gpu, g, &f);
+    // Two activation textures (x folded or staged, dy) and no weight texture.
+    let x_fits = if f.fold() > 1 { direct_fits(gpu, ops, g, &f) } else { x_texture_fits(gpu, g.n, cpad, f.g.input) };
+    let fits = textures_wanted(gpu, ops) && x_fits && x_texture_fits(gpu, g.n, copad, g.output);
     fits.then(|| (f, cpad, dy_tex_channels(g)))
 }
 
@@ -511,6 +506,9 @@ fn backward_weight_tex(
     dw: &Tensor,
     cpad: usize,
 ) -> Result<()> {
+    if f.fold() > 1 {
+        return backward_weight_direct(gpu, pass, g, x, dyp, dw);
+    }
     let xp = pack_x(gpu, pass, g, f, x, cpad, true)?;
     let narrow = g.co <= 4;
     let copad = g.co.div_ceil(16) * 16;
@@ -529,6 +527,25 @@ fn backward_weight_tex(
     let args = [xp.arg(), dyp.arg(), Arg::W(&part)];
     let entry = if narrow { "conv_fast_backward_weight_tex4" } else { "conv_fast_backward_weight_tex" };
     gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
+    dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
+}
+
+/// The weight gradient of a conv the texture family would fold (few input channels), without
+/// folding: `conv_direct_backward_weight` reads the staged input in place (see its shader).
+fn backward_weight_direct(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor, dyp: &Packed, dw: &Tensor) -> Result<()> {
+    let cpad = g.ci.div_ceil(4) * 4;
+    let p = params(g, cpad);
+    let stage = stage_x(gpu, pass, g, x, &p)?;
+    let cols = g.kernel[0] * g.ci * g.kernel[1] * g.kernel[2].div_ceil(4) * g.co.div_ceil(8);
+    // Chunks of output rows: enough tiles for ~32 workgroups of 8, never more chunks than rows.
+    let rows = g.n * g.output[0] * g.output[1];
+    let chunk = rows.div_ceil(256usize.div_ceil(cols).clamp(1, rows));
+    let nchunks = rows.div_ceil(chunk);
+    let part = gpu.scratch(&[nchunks, volume(g.kernel), cpad, g.co.div_ceil(16) * 16])?;
+    let tiles = nchunks * cols;
+    let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, total: tiles as u32, ..p };
+    let args = [Arg::ReadStorageTexture(&stage, wgpu::TextureViewDimension::D3), dyp.arg(), Arg::W(&part)];
+    gpu.dispatch(pass, TEX_SHADER, "conv_direct_backward_weight", &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
     dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
 }
 
