@@ -68,26 +68,13 @@ fn taps4(n: u32, c: u32, zd: i32, zh: i32, ws: i32) -> vec4<f32> {
     return window4(stage_texel(n, c, zd, zh, j), stage_texel(n, c, zd, zh, j + 1), u32(ws & 3));
 }
 
-// Tile t: item, group of 8 output channels, depth, first row, lane's column.
-struct DirectTile { n: u32, g: u32, od: u32, oh0: u32, ow: u32 }
-
-fn direct_tile(t: u32, lane: u32) -> DirectTile {
-    let wblocks = (p.ow + 7u) / 8u;
-    let hblocks = (p.oh + 7u) / 8u;
-    let groups = (p.co + 7u) / 8u;
-    var r = t;
-    let wb = r % wblocks; r /= wblocks;
-    let hb = r % hblocks; r /= hblocks;
-    let od = r % p.od; r /= p.od;
-    return DirectTile(r / groups, r % groups, od, hb * 8u, wb * 8u + lane);
-}
-
-fn put_direct(t: DirectTile, r: u32, a: Acc8) {
+// Row r of tile t (cg: its group of 8 output channels).
+fn put_direct(t: FwdTile, r: u32, a: Acc8) {
     let oh = t.oh0 + r;
     if (oh >= p.oh) { return; }
     let pos = p.yoff + t.od * p.ysd + oh * p.ysh + t.ow * p.ysw;
-    put_raw(t.n, t.g * 8u, pos, t.ow, a.a0);
-    put_raw(t.n, t.g * 8u + 4u, pos, t.ow, a.a1);
+    put_raw(t.n, t.cg * 8u, pos, t.ow, a.a0);
+    put_raw(t.n, t.cg * 8u + 4u, pos, t.ow, a.a1);
 }
 
 @compute @workgroup_size(64)
@@ -96,13 +83,13 @@ fn conv_direct_forward(ids: LaneIds) {
     if (tl.x >= p.total) { return; }
     let lane = tl.y;
     let base = tl.z;
-    let t = direct_tile(tl.x, lane);
+    let t = fwd_tile_of(tl.x, lane, (p.co + 7u) / 8u);
     let cq = p.cpad / 4u;
-    var a0 = Acc8(bias4(t.g * 8u), bias4(t.g * 8u + 4u));
+    var a0 = Acc8(bias4(t.cg * 8u), bias4(t.cg * 8u + 4u));
     var a1 = a0; var a2 = a0; var a3 = a0; var a4 = a0; var a5 = a0; var a6 = a0; var a7 = a0;
     // Lane l fetches weight texel (tap kw0 + l / 2, output channels g*8 + 4 * (l % 2)..+3): the
     // o4 = 2 * (g % 2) + l % 2 texel of its 16-channel group.
-    let wx = i32((t.g / 2u) * 16u + 2u * (t.g % 2u) + (lane & 1u));
+    let wx = i32((t.cg / 2u) * 16u + 2u * (t.cg % 2u) + (lane & 1u));
     let zsh = i32(p.sh);
     for (var kd = 0u; kd < p.kd; kd++) {
         let zd = i32(t.od * p.sd + kd) - i32(p.pd);

@@ -156,13 +156,18 @@ fn lane_tile(i: LaneIds) -> vec3<u32> {
 struct FwdTile { n: u32, cg: u32, od: u32, oh0: u32, ow: u32 }
 
 fn fwd_tile(t: u32, lane: u32) -> FwdTile {
+    return fwd_tile_of(t, lane, p.co16);
+}
+
+// The same over `groups` output channel groups (conv_direct.wgsl's groups of 8).
+fn fwd_tile_of(t: u32, lane: u32, groups: u32) -> FwdTile {
     let wblocks = (p.ow + 7u) / 8u;
     let hblocks = (p.oh + 7u) / 8u;
     var r = t;
     let wb = r % wblocks; r /= wblocks;
     let hb = r % hblocks; r /= hblocks;
     let od = r % p.od; r /= p.od;
-    return FwdTile(r / p.co16, r % p.co16, od, hb * 8u, wb * 8u + lane);
+    return FwdTile(r / groups, r % groups, od, hb * 8u, wb * 8u + lane);
 }
 
 @compute @workgroup_size(64)
