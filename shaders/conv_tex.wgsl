@@ -367,7 +367,7 @@ fn conv_fast_forward_tex4(ids: LaneIds) {
 // tap reaches, while the 16 dy values of that position (the same for every lane) come from
 // texels the 8 lanes fetched for 8 positions at once, handed around with subgroupShuffle.
 // Writes part[chunk][tap][cpad][copad] like conv_fast_backward_weight; conv_fast_weight_sum
-// adds the chunks. Params: the (folded) dispatch geometry; cpad of x, co16 of dy; nchunks,
+// adds the chunks. Params: the dispatch geometry (never folded); cpad of x, co16 of dy; nchunks,
 // chunk (rows per chunk), total = tiles.
 @group(0) @binding(1) var bx: texture_storage_3d<rgba32float, read>;    // packed x (as tx)
 @group(0) @binding(2) var bdy: texture_storage_3d<rgba32float, read>;   // packed dy: quads co16 * 4 per item

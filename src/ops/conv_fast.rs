@@ -9,7 +9,7 @@ use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
 const SHADER: Shader = wgsl!("conv_fast");
 /// The texture family: `conv_tex.wgsl` uses `conv_fast.wgsl`'s parameters and helpers, and
-/// `conv_direct.wgsl` (the first layer's direct forward) both files'.
+/// `conv_direct.wgsl` (the direct kernels of convs with few input channels) both files'.
 const TEX_SHADER: Shader = wgsl!("conv_tex": "conv_fast", "conv_tex", "conv_direct");
 
 /// The tiled kernels' parameters for dispatch geometry `g` with `cpad` packed channels.
@@ -537,7 +537,7 @@ fn backward_weight_direct(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geome
     let p = params(g, cpad);
     let stage = stage_x(gpu, pass, g, x, &p)?;
     let cols = g.kernel[0] * g.ci * g.kernel[1] * g.kernel[2].div_ceil(4) * g.co.div_ceil(8);
-    // Chunks of output rows: enough tiles for ~32 workgroups of 8, never more chunks than rows.
+    // Chunks of output rows: ~256 tiles (32 workgroups), never more chunks than rows.
     let rows = g.n * g.output[0] * g.output[1];
     let chunk = rows.div_ceil(256usize.div_ceil(cols).clamp(1, rows));
     let nchunks = rows.div_ceil(chunk);
