@@ -361,7 +361,7 @@ fn fast_widths_a_multiple_of_four() {
     check_fast(with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 5, 7, [3, 5, 12]), 90);
     check_fast(with(conv2d([3, 3], [1, 1], Padding::Same), 3, 6, [1, 6, 8]), 91);
     check_fast(with(conv2d([3, 3], [1, 3], Padding::Same), 6, 5, [1, 3, 12]), 92);
-    // First layers (`conv_direct_*` on the input staged by `conv_fast_stage_tex_w4`), which the
+    // First layers (`conv_direct_*` on the input staged by `conv_direct_stage_w4`), which the
     // other families fold: 5^3 stride 2 folding H and W, 1 and 4 input channels; 3^3 on 1
     // channel folding W only;
     // 5x5 on a 4-wide grid, whose windows run off both sides.

@@ -1,14 +1,14 @@
 // prepend: conv_fast.wgsl, conv_tex.wgsl
 // The direct kernels of convs with few input channels (the first layer: 1 -> 8, 5^3, stride 2),
-// which the buffer family runs with kernel taps folded into channels (and the texture family
-// did, until the folded packing proved the slow part): that packing writes about kh * kw / (sh * sw) texels per
-// input value, each assembled lane by lane, and took as long as the conv itself (1->8 5^3 s2 on
+// which the buffer family runs with kernel taps folded into channels (the texture family did too,
+// until its folded packing proved the slow part: it writes about kh * kw / (sh * sw) texels per
+// input value, each assembled lane by lane, and took as long as the conv itself, 1->8 5^3 s2 on
 // 64^3, lavapipe 22.3 / AMD Zen 3: ~9.5 of ~19 ms forward). Here each lane reads the input where
 // it is, in the stage texture below: two texels per window row and chunk of 4 W taps, its own 4
 // values picked with vector selects. The forward multiplies them by 8 output channels' weights,
-// fetched one texel a lane and broadcast by subgroup shuffles, over the texture family's tiles
-// (a subgroup of 8 lanes = 8 outputs along W, 8 rows each) per group of 8 output channels; the
-// weight gradient multiplies them by the lane's own dy. Compiled appended to conv_fast.wgsl and
+// fetched one texel a lane and broadcast by subgroup shuffles, over the texture family's tiles (a
+// subgroup of 8 lanes = 8 outputs along W, 8 rows each) per group of 8 output channels; the weight
+// gradient multiplies them by the lane's own dy. Compiled appended to conv_fast.wgsl and
 // conv_tex.wgsl (their Params, lane_tile, Acc8, mac8, bias4, put_raw, chunk_rows and bindings).
 
 // ---- the stage: the input, 4 voxels along W a texel ----------------------------------------
@@ -16,7 +16,7 @@
 // kernels below read their operand as texels (a storage-buffer load is a loop over the 8 lanes
 // on llvmpipe 22.3: 67 ns per 8-lane vector on a Zen 3, a storage-texture texel 9 ns,
 // `rendernet bench --operands`). Written from `src` with one vec4 load per texel when iw is a
-// multiple of 4 (conv_fast_stage_tex_w4), else four scalar ones. Dispatched as
+// multiple of 4 (conv_direct_stage_w4), else four scalar ones. Dispatched as
 // (ceil(ceil(iw / 4) * ih / 64), id, n * ci); parameters the conv's (n, ci, id, ih, iw).
 fn stage_pos(gid: vec3<u32>) -> vec4<u32> {
     let w4n = (p.iw + 3u) / 4u;
@@ -25,7 +25,7 @@ fn stage_pos(gid: vec3<u32>) -> vec4<u32> {
 }
 
 @compute @workgroup_size(64)
-fn conv_fast_stage_tex(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn conv_direct_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s = stage_pos(gid);
     if (s.w == 0u) { return; }
     let row = (s.z * p.ih + s.y) * p.iw;
@@ -38,7 +38,7 @@ fn conv_fast_stage_tex(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 
 @compute @workgroup_size(64)
-fn conv_fast_stage_tex_w4(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn conv_direct_stage_w4(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s = stage_pos(gid);
     if (s.w == 0u) { return; }
     textureStore(tdst, s.xyz, src4[(s.z * p.ih + s.y) * (p.iw / 4u) + s.x]);
@@ -123,16 +123,15 @@ fn conv_direct_forward(ids: LaneIds) {
 }
 
 // ---- weight gradient: lanes = 8 output columns; each lane 4 W taps x 8 output channels ----
-// dw[o, c, kd, kh, kw] = Σ dy[n, o, od, oh, ow] x[n, c, od*sd - pd + kd, oh*sh - ph + kh,
-// ow*sw - pw + kw]. A tile is (chunk of output rows, column = (kd, c, kh, chunk of 4 W taps,
-// group of 8 output channels)); its 8 lanes walk the chunk's rows 8 output columns at a time,
-// each reading its own window (taps4, two stage texels) and its own 8 dy values (two texels of
-// the dy texture of conv_fast_pack_tex(_w4): dq quads per voxel),
-// then the tile's lanes are summed by a shuffle-xor butterfly and written to
-// part[chunk][tap][cpad][co16 * 16] for conv_fast_weight_sum (fold 1). No folded packing: the
-// first layer's (1->8 5^3 s2 on 64^3) took about as long as the gradient itself.
-// Params: the conv's geometry; cpad = ceil(ci / 4) * 4; nchunks, chunk (rows per chunk),
-// total = tiles.
+// dw[o, c, kd, kh, kw] = Σ dy[n, o, od, oh, ow] x[n, c, od*sd - pd + kd, oh*sh - ph + kh, ow*sw -
+// pw + kw]. A tile is (chunk of output rows, column = (kd, c, kh, chunk of 4 W taps, group of 8
+// output channels)); its 8 lanes walk the chunk's rows 8 output columns at a time, each reading
+// its own window (taps4, two stage texels) and its own 8 dy values (two texels of the dy texture
+// of conv_fast_pack_tex(_w4): dq quads per voxel), then the tile's lanes are summed by a
+// shuffle-xor butterfly and written to part[chunk][tap][cpad][co16 * 16] for conv_fast_weight_sum
+// (fold 1). No folded packing: the first layer's (1->8 5^3 s2 on 64^3) took about as long as the
+// gradient itself. Params: the conv's geometry; cpad = ceil(ci / 4) * 4; nchunks, chunk (rows per
+// chunk), total = tiles.
 struct Acc32 { lo: array<vec4<f32>, 4>, hi: array<vec4<f32>, 4> }
 
 fn bw_direct_step(acc: Acc32, x: vec4<f32>, dlo: vec4<f32>, dhi: vec4<f32>) -> Acc32 {

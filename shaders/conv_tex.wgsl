@@ -1,7 +1,7 @@
 // prepend: conv_fast.wgsl
 // The texture family of the tiled conv kernels: operands read through textures, shared
 // across lanes by subgroup shuffles. Compiled appended to conv_fast.wgsl (src/ops/conv_fast.rs
-// builds the module from both), whose parameter block, packing helper (src_at,
+// builds the module from both), whose parameter block, packing helpers (src_at,
 // packed_weight) and output writer (put) it uses.
 //
 // Why (measured on lavapipe 22.3 / LLVM 15, `rendernet bench`, see README "Benchmarks"):

@@ -251,7 +251,7 @@ fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded,
 fn stage_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor, p: &Params) -> Result<wgpu::TextureView> {
     let [id, ih, iw] = g.input;
     let (view, dim) = texture(gpu, [iw.div_ceil(4), ih, g.n * g.ci * id], wgpu::TextureDimension::D3);
-    let entry = if iw % 4 == 0 { "conv_fast_stage_tex_w4" } else { "conv_fast_stage_tex" };
+    let entry = if iw % 4 == 0 { "conv_direct_stage_w4" } else { "conv_direct_stage" };
     let grid = [(iw.div_ceil(4) * ih).div_ceil(64) as u32, id as u32, (g.n * g.ci) as u32];
     gpu.dispatch(pass, TEX_SHADER, entry, p, &[Arg::R(x), Arg::StorageTexture(&view, dim)], grid)?;
     Ok(view)
