@@ -25,14 +25,37 @@ fn dims(x: &Tensor, alpha: &Tensor) -> Result<[usize; 3]> {
     Ok([sh[0], sh[1], sh[2..].iter().product()])
 }
 
+fn numel([n, c, s]: [usize; 3]) -> u64 {
+    (n * c * s) as u64
+}
+
 fn params([n, c, s]: [usize; 3]) -> Params {
     Params { n: (n * c * s) as u32, c: c as u32, s: s as u32 }
 }
 
-/// The entry point (`{stem}` or `{stem}_vec4`, four elements per invocation, where every
-/// channel's run of `s` values splits into whole vec4s) and its invocation count.
-fn entry([n, c, s]: [usize; 3], scalar: &'static str, vec4: &'static str) -> (&'static str, u64) {
-    if s.is_multiple_of(4) { (vec4, (n * c * s / 4) as u64) } else { (scalar, (n * c * s) as u64) }
+/// Parameters of the row kernels (`S` a multiple of 4): see `shaders/prelu.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct RowParams {
+    rows: u32,
+    c: u32,
+    s4: u32,
+    chunks: u32,
+    per: u32,
+}
+
+/// vec4s per invocation in the row kernels: enough that the per-invocation channel lookup
+/// and slope load cost little, few enough that a 64^3 row still spans several workgroups.
+const PER: usize = 8;
+
+/// The row kernels' parameters and workgroup count, where `S` splits into whole vec4s.
+fn rows([n, c, s]: [usize; 3]) -> Option<(RowParams, usize)> {
+    if !s.is_multiple_of(4) {
+        return None;
+    }
+    let chunks = (s / 4).div_ceil(64 * PER).max(1);
+    let p = RowParams { rows: (n * c) as u32, c: c as u32, s4: (s / 4) as u32, chunks: chunks as u32, per: PER as u32 };
+    Some((p, n * c * chunks))
 }
 
 /// `y = x` where `x > 0`, else `alpha[c] * x`; `alpha` is `[C]`.
@@ -40,8 +63,10 @@ pub fn forward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, alpha: &
     let d = dims(x, alpha)?;
     expect_shape("prelu", "output", y, x.shape())?;
     let args = [Arg::R(x), Arg::R(alpha), Arg::W(y)];
-    let (e, count) = entry(d, "prelu_forward", "prelu_forward_vec4");
-    gpu.dispatch(pass, SHADER, e, &params(d), &args, grid_1d(count, 64)?)
+    match rows(d) {
+        Some((rp, groups)) => gpu.dispatch(pass, SHADER, "prelu_forward_rows", &rp, &args, grid_1d(groups as u64, 1)?),
+        None => gpu.dispatch(pass, SHADER, "prelu_forward", &params(d), &args, grid_1d(numel(d), 64)?),
+    }
 }
 
 /// Gradients to the input (`dx`, shape of `x`) and to the slopes (`dalpha`, `[C]`).
@@ -59,9 +84,20 @@ pub fn backward(
         expect_shape("prelu", name, t, x.shape())?;
     }
     expect_shape("prelu", "dalpha", dalpha, alpha.shape())?;
-    let contrib = gpu.scratch(x.shape())?;
-    let args = [Arg::R(x), Arg::R(alpha), Arg::R(dy), Arg::W(dx), Arg::W(&contrib)];
-    let (e, count) = entry(d, "prelu_backward", "prelu_backward_vec4");
-    gpu.dispatch(pass, SHADER, e, &params(d), &args, grid_1d(count, 64)?)?;
-    reduce::sum_outer_inner(gpu, pass, &contrib, d, 1.0, dalpha)
+    let [n, c, _] = d;
+    match rows(d) {
+        Some((rp, groups)) => {
+            // 64 partial sums of the slope gradient per workgroup, summed per channel below.
+            let partial = gpu.scratch(&[groups * 64])?;
+            let args = [Arg::R(x), Arg::R(alpha), Arg::R(dy), Arg::W(dx), Arg::W(&partial)];
+            gpu.dispatch(pass, SHADER, "prelu_backward_rows", &rp, &args, grid_1d(groups as u64, 1)?)?;
+            reduce::sum_outer_inner(gpu, pass, &partial, [n, c, rp.chunks as usize * 64], 1.0, dalpha)
+        }
+        None => {
+            let contrib = gpu.scratch(x.shape())?;
+            let args = [Arg::R(x), Arg::R(alpha), Arg::R(dy), Arg::W(dx), Arg::W(&contrib)];
+            gpu.dispatch(pass, SHADER, "prelu_backward", &params(d), &args, grid_1d(numel(d), 64)?)?;
+            reduce::sum_outer_inner(gpu, pass, &contrib, d, 1.0, dalpha)
+        }
+    }
 }
