@@ -88,19 +88,42 @@ fn mismatched_shapes_are_errors_not_panics() {
     assert!(err.to_string().contains("does not match"), "{err}");
 }
 
-/// Both kernels: spatial sizes that are a multiple of 4 (the row kernels, vec4s) and one that
-/// is not (one element per invocation).
+/// Every kernel: spatial sizes that are a multiple of 4 (the row kernels, vec4s; the window
+/// kernels where the tensor spans a 64 KiB window) and one that is not (one element per
+/// invocation).
 #[test]
 fn prelu_forward_and_backward() {
     // [N, C, D, H, W]: channels not a multiple of 4, odd spatial dims. S = 36 (a row in one
     // workgroup, most of its invocations idle), 27, then 2388: 597 vec4s a row, two
     // workgroups of 64 x 8 vec4s with the second one partly past the row's end.
-    for shape in [[2, 5, 3, 4, 3], [2, 5, 3, 3, 3], [2, 3, 4, 3, 199]] {
-        prelu_case(shape);
+    // Then tensors of more than one 64 KiB uniform window (the window kernels): 4365 vec4s
+    // with S / 4 = 1455 odd (one vec4 an invocation; the second window ends at the tensor's
+    // end, overlapping the first), and 5400 vec4s with S / 4 = 540 (four an invocation).
+    for shape in [[2, 5, 3, 4, 3], [2, 5, 3, 3, 3], [2, 3, 4, 3, 199], [1, 3, 5, 12, 97], [2, 5, 4, 6, 90]] {
+        prelu_case(shape, None);
     }
 }
 
-fn prelu_case(shape: [usize; 5]) {
+/// The window kernels over more than four windows: two dispatches, the second holding the
+/// tensor's overlapping last window. 17490 vec4s with S / 4 odd (one vec4 an invocation),
+/// then 16640 vec4s with S / 4 = 3328 (eight an invocation). dx is checked by finite
+/// differences at every 31st value and around every window boundary (a full check would
+/// take n^2 reference evaluations).
+#[test]
+fn prelu_windows_over_several_dispatches() {
+    for shape in [[2, 3, 4, 55, 53], [1, 5, 8, 16, 104]] {
+        let n: usize = shape.iter().product();
+        let edges = (1..=n / 16384).flat_map(|k| (16384 * k).saturating_sub(6)..(16384 * k + 6).min(n));
+        let mut at: Vec<usize> = (0..n).step_by(31).chain(edges).chain(n - 6..n).collect();
+        at.sort_unstable();
+        at.dedup();
+        prelu_case(shape, Some(&at));
+    }
+}
+
+/// Forward, dx and dalpha of PReLU on `shape` against the reference, dx by finite
+/// differences at the indices `at` (every index if `None`).
+fn prelu_case(shape: [usize; 5], at: Option<&[usize]>) {
     let (c, s) = (shape[1], shape[2..].iter().product::<usize>());
     let n: usize = shape.iter().product();
     let mut rng = Rng(4);
@@ -115,13 +138,21 @@ fn prelu_case(shape: [usize; 5]) {
     });
     let what = |t: &str| format!("prelu {t}, shape {shape:?}");
     assert_close(&what("forward"), &download(&ty), &prelu_ref(&x, &alpha, c, s), 1e-6, 1e-5);
-    let want_dx = fd_grad(&x, |x| dot(&r, &prelu_ref(x, &alpha, c, s)));
-    assert_close(&what("backward input"), &download(&tdx), &want_dx, 1e-6, 1e-4);
-    // dalpha sums up to ~2400 terms of size <= 3 per channel (f32 error ~1e-5 absolute,
+    let loss = |x: &[f64]| dot(&r, &prelu_ref(x, &alpha, c, s));
+    let (got_dx, want_dx) = match at {
+        None => (download(&tdx), fd_grad(&x, loss)),
+        Some(at) => {
+            let all = download(&tdx);
+            (at.iter().map(|&i| all[i]).collect(), fd_grad_at(&x, at.iter().copied(), loss))
+        }
+    };
+    assert_close(&what("backward input"), &got_dx, &want_dx, 1e-6, 1e-4);
+    // dalpha sums up to ~14000 terms of size <= 3 per channel (f32 error ~1e-4 absolute,
     // several times under the 1e-4 relative bound on sums of that size).
     let want_da = fd_grad(&alpha, |a| dot(&r, &prelu_ref(&x, a, c, s)));
     assert_close(&what("backward alpha"), &download(&tda), &want_da, 1e-5, 1e-4);
 }
+
 
 #[test]
 fn prelu_rejects_wrong_alpha() {

@@ -34,8 +34,9 @@ fn add_copy(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
 }
 
 // ---- four values per invocation, for n a multiple of 4 (ops::elementwise picks these) ----
-// llvmpipe runs every storage load and store as a loop over the 8 SIMD lanes, a vec4 at about
-// the cost of a float, so these take a quarter of the scalar entries' load loops.
+// llvmpipe runs every storage load and store as a loop over the 8 SIMD lanes: a quarter of
+// the loops, though each vec4 costs more than a float (Zen 3, Mesa 22.3: a vec4 load ~3.6
+// floats' loads, a vec4 store ~2 floats' stores; `rendernet bench --operands`).
 @group(0) @binding(1) var<storage, read> fa4: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> fb4: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> fy4: array<vec4<f32>>;

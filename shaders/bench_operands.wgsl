@@ -10,6 +10,13 @@ struct Params { iters: u32, total: u32, div: u32, mask: u32, table: array<vec4<f
 @group(0) @binding(2) var<storage, read> buf: array<f32>;
 @group(0) @binding(3) var tex: texture_2d<f32>;
 @group(0) @binding(4) var stex: texture_storage_2d<rgba32float, read>;
+// `buf` again, four floats an element; and where the store rows write.
+@group(0) @binding(5) var<storage, read> buf4: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> sink: array<f32>;
+@group(0) @binding(7) var<storage, read_write> sink4: array<vec4<f32>>;
+@group(0) @binding(8) var wtex: texture_storage_2d<rgba32float, write>;
+// A 64 KiB tensor bound as a uniform buffer (the most lavapipe allows in one binding).
+@group(0) @binding(9) var<uniform> win: array<vec4<f32>, 4096>;
 var<workgroup> wg: array<f32, 128>;
 
 // Dispatched with exactly p.total invocations (a multiple of 64): no early return, so the

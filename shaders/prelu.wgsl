@@ -100,3 +100,86 @@ fn prelu_backward_rows(@builtin(local_invocation_index) lid: u32, @builtin(workg
     }
     partial[(wid.x + wid.y * nwg.x) * 64u + lid] = (acc.x + acc.y) + (acc.z + acc.w);
 }
+
+// ---- windows: x (and dy) read as 64 KiB uniform blocks, four a dispatch ----
+// On lavapipe a per-lane uniform load is a gather, ~16x cheaper than a storage-buffer load
+// (`rendernet bench --operands`), but one binding holds at most 64 KiB: 4096 vec4s. A
+// dispatch covers vec4s [start4, end4) of the tensor, up to four windows: window k holds
+// vec4s from start4 + 4096 k and is read from its binding (wx0..wx3), which begins at vec4
+// base4[k] (its own start but for the tensor's last window, which ends at the tensor's end).
+// Four a dispatch, not one: each lavapipe dispatch waits for its threads, and a loaded
+// machine made one dispatch per window slower than the storage loads it saved. llvmpipe
+// runs all four loads and keeps one (masking, not branching), still ~4x cheaper than one
+// storage load. An invocation takes `per` vec4s of one row and one window (per divides s4
+// and 4096): one slope load and, in the backward, one slope-gradient partial at index
+// first vec4 / per.
+struct WinParams { base4: vec4<u32>, c: u32, s4: u32, start4: u32, end4: u32, per: u32 }
+@group(0) @binding(0) var<uniform> w: WinParams;
+@group(0) @binding(1) var<uniform> wx0: array<vec4<f32>, 4096>;
+@group(0) @binding(2) var<uniform> wx1: array<vec4<f32>, 4096>;
+@group(0) @binding(3) var<uniform> wx2: array<vec4<f32>, 4096>;
+@group(0) @binding(4) var<uniform> wx3: array<vec4<f32>, 4096>;
+@group(0) @binding(5) var<storage, read> walpha: array<f32>;
+@group(0) @binding(6) var<storage, read_write> wy4: array<vec4<f32>>;
+
+// The first vec4 of this invocation's run.
+fn first_vec4(gid: vec3<u32>, nwg: vec3<u32>) -> u32 {
+    return w.start4 + (gid.x + gid.y * nwg.x * 64u) * w.per;
+}
+
+// The slope of vec4 f's row.
+fn slope_at(f: u32) -> f32 {
+    return walpha[(f / w.s4) % w.c];
+}
+
+// The dispatch's window of vec4 f, and f's index in that window's binding.
+fn window_of(f: u32) -> vec2<u32> {
+    let k = (f - w.start4) >> 12u;
+    return vec2<u32>(k, f - w.base4[k]);
+}
+
+fn x_at(wl: vec2<u32>) -> vec4<f32> {
+    let l = wl.y;
+    return select(select(wx0[l], wx1[l], wl.x == 1u), select(wx2[l], wx3[l], wl.x == 3u), wl.x >= 2u);
+}
+
+@compute @workgroup_size(64)
+fn prelu_forward_window(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let first = first_vec4(gid, nwg);
+    if (first >= w.end4) { return; }
+    let a = slope_at(first);
+    let wl = window_of(first);
+    for (var j = 0u; j < w.per; j++) {
+        let x = x_at(wl + vec2<u32>(0u, j));
+        wy4[first + j] = select(a * x, x, x > vec4<f32>(0.0));
+    }
+}
+
+@group(0) @binding(6) var<uniform> wdy0: array<vec4<f32>, 4096>;
+@group(0) @binding(7) var<uniform> wdy1: array<vec4<f32>, 4096>;
+@group(0) @binding(8) var<uniform> wdy2: array<vec4<f32>, 4096>;
+@group(0) @binding(9) var<uniform> wdy3: array<vec4<f32>, 4096>;
+@group(0) @binding(10) var<storage, read_write> wdx4: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read_write> wpartial: array<f32>;
+
+fn dy_at(wl: vec2<u32>) -> vec4<f32> {
+    let l = wl.y;
+    return select(select(wdy0[l], wdy1[l], wl.x == 1u), select(wdy2[l], wdy3[l], wl.x == 3u), wl.x >= 2u);
+}
+
+@compute @workgroup_size(64)
+fn prelu_backward_window(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let first = first_vec4(gid, nwg);
+    if (first >= w.end4) { return; }
+    let a = slope_at(first);
+    let wl = window_of(first);
+    var acc = vec4<f32>(0.0);
+    for (var j = 0u; j < w.per; j++) {
+        let x = x_at(wl + vec2<u32>(0u, j));
+        let dy = dy_at(wl + vec2<u32>(0u, j));
+        let pos = x > vec4<f32>(0.0);
+        wdx4[first + j] = select(a * dy, dy, pos);
+        acc += select(dy * x, vec4<f32>(0.0), pos);
+    }
+    wpartial[first / w.per] = (acc.x + acc.y) + (acc.z + acc.w);
+}

@@ -43,8 +43,8 @@ fn tree_sum(lid: u32, s: f32, valid: bool, b: u32) {
 
 // The same for C a multiple of 4: four values a load, and a loop over A around a loop over C
 // in place of the flat index's division. llvmpipe runs every storage load as a loop over the
-// 8 SIMD lanes (a vec4 at about the cost of a float) and divides lane by lane (measured on an
-// AMD Zen 3: a load ~180 FMAs at the ceiling, a division ~40; `rendernet bench --operands`).
+// 8 SIMD lanes (a vec4 at ~3.6 floats' cost) and divides lane by lane (measured on an AMD
+// Zen 3: a load ~180 FMAs at the ceiling, a division ~40; `rendernet bench --operands`).
 @group(0) @binding(1) var<storage, read> x4: array<vec4<f32>>;
 
 @compute @workgroup_size(64)

@@ -76,7 +76,7 @@ fn bench_operands_prices_each_operand_against_the_fma() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("bench --operands --json prints JSON");
     assert!(v["fma_ceiling_gflops"].as_f64().is_some_and(|c| c > 0.0), "{v}");
     let rows = v["operands"].as_array().expect("operands");
-    assert_eq!(rows.len(), 13, "{v}");
+    assert_eq!(rows.len(), 18, "{v}");
     let f = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k} in {r}"));
     assert_eq!(rows[0]["operand"], "none (plain FMA)", "{v}");
     assert_eq!(f(&rows[0], "extra_ns"), 0.0, "{v}");

@@ -89,9 +89,15 @@ pub fn assert_close(what: &str, got: &[f64], want: &[f64], atol: f64, rtol: f64)
 
 /// Central finite differences of `f` at `x`: d f / d x_i for every i.
 pub fn fd_grad(x: &[f64], f: impl Fn(&[f64]) -> f64) -> Vec<f64> {
+    fd_grad_at(x, 0..x.len(), f)
+}
+
+/// Central finite differences of `f` at `x`, only for the indices `at` (in their order): for
+/// tensors too large to difference every value.
+pub fn fd_grad_at(x: &[f64], at: impl IntoIterator<Item = usize>, f: impl Fn(&[f64]) -> f64) -> Vec<f64> {
     let h = 1e-6;
     let mut xp = x.to_vec();
-    (0..x.len())
+    at.into_iter()
         .map(|i| {
             let x0 = xp[i];
             xp[i] = x0 + h;

@@ -1,5 +1,5 @@
 //! `rendernet bench --operands`: what reading one operand of each kind costs on this adapter,
-//! beyond a plain FMA. On lavapipe the answer decides how a kernel should be built, and it
+//! beyond a plain FMA, and what writing one costs. On lavapipe the answer decides how a kernel should be built, and it
 //! changes with the driver and the CPU (a storage-buffer load was ~200 cycles per 8 lanes on
 //! an AMD Zen 3 with Mesa 22.3, where a texel fetch was ~15; on a Zen 4 the two cost alike and
 //! a uniform-buffer load four times less), so it is measured rather than assumed.
@@ -17,12 +17,34 @@ struct Kind {
     body: &'static str,
 }
 
-const KINDS: [Kind; 13] = [
+const KINDS: [Kind; 18] = [
     Kind { operand: "none (plain FMA)", address: "-", body: "return x;" },
     Kind { operand: "storage-buffer load", address: "per lane", body: "return buf[(i * 7u + it * 64u + k * 13u) & p.mask];" },
     Kind { operand: "storage-buffer load", address: "same in all lanes", body: "return buf[(it * 64u + k * 13u) & p.mask];" },
+    Kind {
+        operand: "storage-buffer load (vec4, 4 floats)",
+        address: "per lane",
+        body: "let t = buf4[(i * 7u + it * 16u + k * 13u) & (p.mask >> 2u)]; return t.x + t.y + t.z + t.w;",
+    },
+    // A store beside the FMA, whose addend stays `x`: the difference is the store alone.
+    Kind { operand: "storage-buffer store", address: "per lane", body: "sink[(i * 7u + it * 64u + k * 13u) & p.mask] = x; return x;" },
+    Kind {
+        operand: "storage-buffer store (vec4, 4 floats)",
+        address: "per lane",
+        body: "sink4[(i * 7u + it * 16u + k * 13u) & (p.mask >> 2u)] = vec4<f32>(x); return x;",
+    },
+    Kind {
+        operand: "rgba32f storage-texture store (4 floats)",
+        address: "per lane",
+        body: "textureStore(wtex, vec2<u32>((i + k) & 63u, it & 63u), vec4<f32>(x)); return x;",
+    },
     Kind { operand: "uniform-buffer load", address: "per lane", body: "return p.table[(i + it + k) & 7u].x;" },
     Kind { operand: "uniform-buffer load", address: "same in all lanes", body: "return p.table[(it + k) & 7u].x;" },
+    Kind {
+        operand: "uniform load of a 64 KiB tensor (vec4, 4 floats)",
+        address: "per lane",
+        body: "let t = win[(i * 7u + it * 16u + k * 13u) & 4095u]; return t.x + t.y + t.z + t.w;",
+    },
     Kind {
         operand: "rgba32f texel fetch (4 floats)",
         address: "per lane",
@@ -87,11 +109,20 @@ pub fn operand_costs(gpu: &Gpu, clock: Clock, samples: usize, ceiling: f64) -> R
     let table = std::array::from_fn(|r| std::array::from_fn(|c| (r * 4 + c) as f32 * 1e-3));
     let params = Params { iters, total, div: 7, mask: 4095, table };
     let stex = gpu.scratch_texture([64, 64, 1], wgpu::TextureDimension::D2);
+    let (sink, sink4) = (Tensor::zeros(gpu, &[4096])?, Tensor::zeros(gpu, &[4096])?);
+    let wtex = gpu.scratch_texture([64, 64, 1], wgpu::TextureDimension::D2);
+    let win = Tensor::from_slice(gpu, &[16384], &(0..16384).map(|v| (v % 89) as f32 * 1e-3).collect::<Vec<_>>())?;
+    let d2 = wgpu::TextureViewDimension::D2;
     let args = [
         Arg::W(&out),
         Arg::R(&buf),
-        Arg::Texture(&tex, wgpu::TextureViewDimension::D2),
-        Arg::ReadStorageTexture(&stex, wgpu::TextureViewDimension::D2),
+        Arg::Texture(&tex, d2),
+        Arg::ReadStorageTexture(&stex, d2),
+        Arg::R(&buf),
+        Arg::W(&sink),
+        Arg::W(&sink4),
+        Arg::StorageTexture(&wtex, d2),
+        Arg::U(&win),
     ];
     // Vector operations per call: 8 lanes a vector, 8 accumulators an iteration; threads add up.
     let vector_ops = total as f64 / 8.0 * iters as f64 * 8.0;

@@ -39,9 +39,9 @@ pub struct BenchArgs {
     profile: bool,
     /// Instead of the kernels, time what reading one operand costs beyond a plain FMA, per kind
     /// (storage-buffer, uniform-buffer, texel and workgroup-memory loads with a per-lane or a
-    /// lane-uniform address, a subgroup shuffle, an integer division): on lavapipe this
-    /// changes several-fold with the driver and the CPU, and decides how a kernel should read
-    /// its operands.
+    /// lane-uniform address, a subgroup shuffle, an integer division), and what a store to a
+    /// storage buffer or a storage texture costs: on lavapipe this changes several-fold with
+    /// the driver and the CPU, and decides how a kernel should read and write its operands.
     #[arg(long, conflicts_with_all = ["filter", "kernel", "profile"])]
     operands: bool,
 }

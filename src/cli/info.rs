@@ -10,7 +10,7 @@ pub fn run() -> rendernet::Result<()> {
     println!("adapter:  {} ({:?}, {:?})", i.name, i.device_type, i.backend);
     println!("driver:   {} {}", i.driver, i.driver_info);
     println!("max_storage_buffer_binding_size: {} MiB", l.max_storage_buffer_binding_size >> 20);
-    println!("max_uniform_buffer_binding_size: {} KiB", l.max_uniform_buffer_binding_size >> 10);
+    println!("max_uniform_buffer_binding_size: {} KiB ({} a shader stage, offsets aligned to {} B)", l.max_uniform_buffer_binding_size >> 10, l.max_uniform_buffers_per_shader_stage, l.min_uniform_buffer_offset_alignment);
     println!("max_buffer_size:                 {} MiB", l.max_buffer_size >> 20);
     println!("max_compute_workgroups_per_dimension: {}", l.max_compute_workgroups_per_dimension);
     println!("max_compute_invocations_per_workgroup: {}", l.max_compute_invocations_per_workgroup);

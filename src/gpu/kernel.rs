@@ -79,6 +79,11 @@ pub enum Arg<'a> {
     StorageTexture(&'a wgpu::TextureView, wgpu::TextureViewDimension),
     /// A read-only rgba32float storage texture of the given dimension.
     ReadStorageTexture(&'a wgpu::TextureView, wgpu::TextureViewDimension),
+    /// A tensor read as a uniform buffer (`var<uniform>`): at most
+    /// `max_uniform_buffer_binding_size` bytes (64 KiB on lavapipe), at an offset that is a
+    /// multiple of `min_uniform_buffer_offset_alignment`. On lavapipe a per-lane load from it
+    /// is a gather, ~15x cheaper than a storage-buffer load (`rendernet bench --operands`).
+    U(&'a Tensor),
 }
 
 impl Arg<'_> {
@@ -98,6 +103,7 @@ impl Arg<'_> {
                 format: wgpu::TextureFormat::Rgba32Float,
                 view_dimension,
             },
+            Arg::U(_) => wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
             _ => wgpu::BindingType::Buffer {
                 ty: wgpu::BufferBindingType::Storage { read_only: !matches!(self, Arg::W(_)) },
                 has_dynamic_offset: false,
@@ -195,7 +201,7 @@ impl Gpu {
         let mut entries = vec![wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::Buffer(uniform) }];
         for (i, a) in args.iter().enumerate() {
             let resource = match a {
-                Arg::R(t) | Arg::W(t) => t.binding(),
+                Arg::R(t) | Arg::W(t) | Arg::U(t) => t.binding(),
                 Arg::Absent => self.dummy.as_entire_binding(),
                 Arg::Texture(v, _) | Arg::StorageTexture(v, _) | Arg::ReadStorageTexture(v, _) => wgpu::BindingResource::TextureView(v),
             };

@@ -105,7 +105,7 @@ impl Memo {
         self.data.extend_from_slice(params);
         self.data.resize((k + 1) * SLOT as usize, 0);
         let resources: Vec<Res> = args.iter().map(|a| match a {
-            super::Arg::R(t) | super::Arg::W(t) => Res::Buffer(t.buffer().clone(), t.offset()),
+            super::Arg::R(t) | super::Arg::W(t) | super::Arg::U(t) => Res::Buffer(t.buffer().clone(), t.offset()),
             super::Arg::Absent => Res::Absent,
             super::Arg::Texture(v, _) | super::Arg::StorageTexture(v, _) | super::Arg::ReadStorageTexture(v, _) => Res::View((*v).clone()),
         }).collect();

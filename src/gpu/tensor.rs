@@ -162,9 +162,10 @@ impl Tensor {
         &self.buffer
     }
 
-    /// Usage flags every tensor buffer carries.
+    /// Usage flags every tensor buffer carries (UNIFORM so that a kernel may read a tensor of
+    /// at most 64 KiB through [`crate::gpu::Arg::U`]).
     pub(crate) fn usage() -> wgpu::BufferUsages {
-        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST
     }
 
     fn checked_bytes(gpu: &Gpu, shape: &[usize]) -> Result<u64> {

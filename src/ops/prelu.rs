@@ -58,10 +58,79 @@ fn rows([n, c, s]: [usize; 3]) -> Option<(RowParams, usize)> {
     Some((p, n * c * chunks))
 }
 
+/// Vec4s in one uniform window: 64 KiB, the `max_uniform_buffer_binding_size` every WebGPU
+/// device has at least.
+const WINDOW4: usize = 4096;
+
+/// Windows a dispatch reads (the shader's bindings wx0..wx3 and wdy0..wdy3: nine uniform
+/// buffers with the parameters, within WebGPU's default limit of 12).
+const WINDOWS: usize = 4;
+
+/// Parameters of one window dispatch: see `shaders/prelu.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct WinParams {
+    base4: [u32; 4],
+    c: u32,
+    s4: u32,
+    start4: u32,
+    end4: u32,
+    per: u32,
+    pad: [u32; 3],
+}
+
+/// The window dispatches over `t` (dims `[n, c, s]`), in order, where they apply: `S` splits
+/// into whole vec4s, `t` holds at least one window, and every window's offset suits a
+/// uniform binding. The tensor's last window ends at its end (so it may overlap the one
+/// before); `per`, the vec4s an invocation takes, divides both a row and a window.
+fn windows(gpu: &Gpu, t: &Tensor, [n, c, s]: [usize; 3]) -> Option<Vec<WinParams>> {
+    let total4 = n * c * s / 4;
+    let l = &gpu.limits;
+    let align4 = (l.min_uniform_buffer_offset_alignment as usize).div_ceil(16).max(1);
+    let last_base = total4.checked_sub(WINDOW4)?;
+    let fits = s.is_multiple_of(4)
+        && (l.max_uniform_buffer_binding_size as usize) >= WINDOW4 * 16
+        && l.max_uniform_buffers_per_shader_stage as usize > 2 * WINDOWS
+        && (t.offset() as usize).is_multiple_of(align4 * 16)
+        && (total4.is_multiple_of(WINDOW4) || last_base.is_multiple_of(align4));
+    if !fits {
+        return None;
+    }
+    let s4 = s / 4;
+    let per = [8, 4, 2, 1].into_iter().find(|p| s4.is_multiple_of(*p)).unwrap_or(1);
+    let u = |v: usize| v as u32;
+    let dispatch = |d: usize| {
+        let start4 = d * WINDOWS * WINDOW4;
+        let base4 = std::array::from_fn(|k| u((start4 + k * WINDOW4).min(last_base)));
+        let end4 = u((start4 + WINDOWS * WINDOW4).min(total4));
+        WinParams { base4, c: u(c), s4: u(s4), start4: u(start4), end4, per: u(per), pad: [0; 3] }
+    };
+    Some((0..total4.div_ceil(WINDOWS * WINDOW4)).map(dispatch).collect())
+}
+
+/// The four 64 KiB ranges of `t` that dispatch `w` reads, as tensors to bind as uniform
+/// buffers (a window past the tensor's end repeats the last one; no invocation reads it).
+fn windows_of(t: &Tensor, w: &WinParams) -> Result<Vec<Tensor>> {
+    w.base4.iter().map(|&b| Tensor::view(t.clone().into_buffer(), t.offset() + b as u64 * 16, &[WINDOW4 * 4])).collect()
+}
+
+/// Invocations (and so the grid) of dispatch `w`.
+fn window_grid(w: &WinParams) -> Result<[u32; 3]> {
+    grid_1d(((w.end4 - w.start4) as u64).div_ceil(w.per as u64), 64)
+}
+
 /// `y = x` where `x > 0`, else `alpha[c] * x`; `alpha` is `[C]`.
 pub fn forward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, alpha: &Tensor, y: &Tensor) -> Result<()> {
     let d = dims(x, alpha)?;
     expect_shape("prelu", "output", y, x.shape())?;
+    if let Some(ws) = windows(gpu, x, d) {
+        for w in &ws {
+            let xw = windows_of(x, w)?;
+            let args: Vec<Arg> = xw.iter().map(Arg::U).chain([Arg::R(alpha), Arg::W(y)]).collect();
+            gpu.dispatch(pass, SHADER, "prelu_forward_window", w, &args, window_grid(w)?)?;
+        }
+        return Ok(());
+    }
     let args = [Arg::R(x), Arg::R(alpha), Arg::W(y)];
     match rows(d) {
         Some((rp, groups)) => gpu.dispatch(pass, SHADER, "prelu_forward_rows", &rp, &args, grid_1d(groups as u64, 1)?),
@@ -84,7 +153,19 @@ pub fn backward(
         expect_shape("prelu", name, t, x.shape())?;
     }
     expect_shape("prelu", "dalpha", dalpha, alpha.shape())?;
-    let [n, c, _] = d;
+    let [n, c, s] = d;
+    // Windows need x and dy alike: both are read through them.
+    if let (Some(ws), Some(_)) = (windows(gpu, x, d), windows(gpu, dy, d)) {
+        let per = ws[0].per as usize;
+        let partial = gpu.scratch(&[n * c * s / 4 / per])?;
+        for w in &ws {
+            let (xw, dyw) = (windows_of(x, w)?, windows_of(dy, w)?);
+            let args: Vec<Arg> =
+                xw.iter().map(Arg::U).chain([Arg::R(alpha)]).chain(dyw.iter().map(Arg::U)).chain([Arg::W(dx), Arg::W(&partial)]).collect();
+            gpu.dispatch(pass, SHADER, "prelu_backward_window", w, &args, window_grid(w)?)?;
+        }
+        return reduce::sum_outer_inner(gpu, pass, &partial, [n, c, s / 4 / per], 1.0, dalpha);
+    }
     match rows(d) {
         Some((rp, groups)) => {
             // 64 partial sums of the slope gradient per workgroup, summed per channel below.
