@@ -118,6 +118,13 @@ fn prelu_windows_over_several_dispatches() {
         at.sort_unstable();
         at.dedup();
         prelu_case(shape, Some(&at));
+        // The windows ran: two forward dispatches of four windows each (on a CPU adapter;
+        // elsewhere the one dispatch of the rows kernel).
+        let (tx, ta, ty) = (zeros(&shape), zeros(&[shape[1]]), zeros(&shape));
+        let before = gpu().dispatch_count();
+        run(|p| prelu::forward(gpu(), p, &tx, &ta, &ty));
+        let want = if gpu().info.device_type == wgpu::DeviceType::Cpu { 2 } else { 1 };
+        assert_eq!(gpu().dispatch_count() - before, want, "forward dispatches, shape {shape:?}");
     }
 }
 

@@ -79,16 +79,19 @@ struct WinParams {
     pad: [u32; 3],
 }
 
-/// The window dispatches over `t` (dims `[n, c, s]`), in order, where they apply: `S` splits
-/// into whole vec4s, `t` holds at least one window, and every window's offset suits a
-/// uniform binding. The tensor's last window ends at its end (so it may overlap the one
-/// before); `per`, the vec4s an invocation takes, divides both a row and a window.
+/// The window dispatches over `t` (dims `[n, c, s]`), in order, where they apply: a CPU
+/// adapter (lavapipe; a GPU's storage loads are fast, and a uniform read at per-lane
+/// addresses may serialise there), `S` split into whole vec4s, `t` holding at least one
+/// window, and every window's offset suiting a uniform binding. The tensor's last window
+/// ends at its end (so it may overlap the one before); `per`, the vec4s an invocation takes,
+/// divides both a row and a window.
 fn windows(gpu: &Gpu, t: &Tensor, [n, c, s]: [usize; 3]) -> Option<Vec<WinParams>> {
     let total4 = n * c * s / 4;
     let l = &gpu.limits;
     let align4 = (l.min_uniform_buffer_offset_alignment as usize).div_ceil(16).max(1);
     let last_base = total4.checked_sub(WINDOW4)?;
-    let fits = s.is_multiple_of(4)
+    let fits = gpu.info.device_type == wgpu::DeviceType::Cpu
+        && s.is_multiple_of(4)
         && (l.max_uniform_buffer_binding_size as usize) >= WINDOW4 * 16
         && l.max_uniform_buffers_per_shader_stage as usize > 2 * WINDOWS
         && (t.offset() as usize).is_multiple_of(align4 * 16)
