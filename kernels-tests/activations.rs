@@ -160,7 +160,6 @@ fn prelu_case(shape: [usize; 5], at: Option<&[usize]>) {
     assert_close(&what("backward alpha"), &download(&tda), &want_da, 1e-5, 1e-4);
 }
 
-
 #[test]
 fn prelu_rejects_wrong_alpha() {
     let (tx, ta, ty) = (zeros(&[2, 3, 4]), zeros(&[4]), zeros(&[2, 3, 4]));

@@ -1,9 +1,10 @@
 // PReLU with one learned slope per channel (the paper's activation; alpha initialised to 0).
 // x is [N, C, S...] flattened to [N, C, S]. Forward y = x for x > 0, alpha[c] * x otherwise.
 // Backward dx = dy * (x > 0 ? 1 : alpha[c]); the alpha gradient is Σ_{n,s} dy * x over x <= 0,
-// written per element (`contrib`) or per invocation (`partial`, the row kernels) and summed
-// deterministically by reduce.wgsl. The first two entry points serve any S; the row kernels,
-// faster, S a multiple of 4.
+// written per element (`contrib`) or per invocation (`partial`, `wpartial`) and summed
+// deterministically by reduce.wgsl. The first two entry points serve any S; the row kernels
+// S a multiple of 4; the window kernels, fastest on lavapipe, S a multiple of 4 in tensors of
+// at least 64 KiB on CPU adapters (src/ops/prelu.rs picks).
 
 struct Params { n: u32, c: u32, s: u32 }
 @group(0) @binding(0) var<uniform> p: Params;

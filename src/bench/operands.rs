@@ -1,8 +1,9 @@
 //! `rendernet bench --operands`: what reading one operand of each kind costs on this adapter,
-//! beyond a plain FMA, and what writing one costs. On lavapipe the answer decides how a kernel should be built, and it
-//! changes with the driver and the CPU (a storage-buffer load was ~200 cycles per 8 lanes on
-//! an AMD Zen 3 with Mesa 22.3, where a texel fetch was ~15; on a Zen 4 the two cost alike and
-//! a uniform-buffer load four times less), so it is measured rather than assumed.
+//! beyond a plain FMA, and what writing one costs. On lavapipe the answer decides how a
+//! kernel should be built, and it changes with the driver and the CPU (a storage-buffer load
+//! was ~200 cycles per 8 lanes on an AMD Zen 3 with Mesa 22.3, where a texel fetch was ~15; on
+//! a Zen 4 the two cost alike and a uniform-buffer load four times less), so it is measured
+//! rather than assumed.
 
 use super::{Clock, time_calls};
 use crate::error::Result;

@@ -82,7 +82,7 @@ pub enum Arg<'a> {
     /// A tensor read as a uniform buffer (`var<uniform>`): at most
     /// `max_uniform_buffer_binding_size` bytes (64 KiB on lavapipe), at an offset that is a
     /// multiple of `min_uniform_buffer_offset_alignment`. On lavapipe a per-lane load from it
-    /// is a gather, ~15x cheaper than a storage-buffer load (`rendernet bench --operands`).
+    /// is a gather, ~16x cheaper than a storage-buffer load (`rendernet bench --operands`).
     U(&'a Tensor),
 }
 

@@ -79,23 +79,27 @@ struct WinParams {
     pad: [u32; 3],
 }
 
-/// The window dispatches over `t` (dims `[n, c, s]`), in order, where they apply: a CPU
-/// adapter (lavapipe; a GPU's storage loads are fast, and a uniform read at per-lane
-/// addresses may serialise there), `S` split into whole vec4s, `t` holding at least one
-/// window, and every window's offset suiting a uniform binding. The tensor's last window
-/// ends at its end (so it may overlap the one before); `per`, the vec4s an invocation takes,
-/// divides both a row and a window.
-fn windows(gpu: &Gpu, t: &Tensor, [n, c, s]: [usize; 3]) -> Option<Vec<WinParams>> {
+/// A uniform binding's offset alignment, in vec4s.
+fn align4(gpu: &Gpu) -> usize {
+    (gpu.limits.min_uniform_buffer_offset_alignment as usize).div_ceil(16).max(1)
+}
+
+/// The window dispatches over a tensor of dims `[n, c, s]`, in order, where they apply: a
+/// CPU adapter (lavapipe; a GPU's storage loads are fast, and a uniform read at per-lane
+/// addresses may serialise there), `S` split into whole vec4s, the tensor holding at least
+/// one window, and every window's offset within it suiting a uniform binding (the tensor's
+/// own offset is [`window_aligned`]'s to check). The tensor's last window ends at its end
+/// (so it may overlap the one before); `per`, the vec4s an invocation takes, divides both a
+/// row and a window.
+fn windows(gpu: &Gpu, [n, c, s]: [usize; 3]) -> Option<Vec<WinParams>> {
     let total4 = n * c * s / 4;
     let l = &gpu.limits;
-    let align4 = (l.min_uniform_buffer_offset_alignment as usize).div_ceil(16).max(1);
     let last_base = total4.checked_sub(WINDOW4)?;
     let fits = gpu.info.device_type == wgpu::DeviceType::Cpu
         && s.is_multiple_of(4)
         && (l.max_uniform_buffer_binding_size as usize) >= WINDOW4 * 16
         && l.max_uniform_buffers_per_shader_stage as usize > 2 * WINDOWS
-        && (t.offset() as usize).is_multiple_of(align4 * 16)
-        && (total4.is_multiple_of(WINDOW4) || last_base.is_multiple_of(align4));
+        && (total4.is_multiple_of(WINDOW4) || last_base.is_multiple_of(align4(gpu)));
     if !fits {
         return None;
     }
@@ -109,6 +113,11 @@ fn windows(gpu: &Gpu, t: &Tensor, [n, c, s]: [usize; 3]) -> Option<Vec<WinParams
         WinParams { base4, c: u(c), s4: u(s4), start4: u(start4), end4, per: u(per), pad: [0; 3] }
     };
     Some((0..total4.div_ceil(WINDOWS * WINDOW4)).map(dispatch).collect())
+}
+
+/// Whether `t` starts where a uniform binding may (its windows then do too).
+fn window_aligned(gpu: &Gpu, t: &Tensor) -> bool {
+    (t.offset() as usize).is_multiple_of(align4(gpu) * 16)
 }
 
 /// The four 64 KiB ranges of `t` that dispatch `w` reads, as tensors to bind as uniform
@@ -126,7 +135,7 @@ fn window_grid(w: &WinParams) -> Result<[u32; 3]> {
 pub fn forward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, alpha: &Tensor, y: &Tensor) -> Result<()> {
     let d = dims(x, alpha)?;
     expect_shape("prelu", "output", y, x.shape())?;
-    if let Some(ws) = windows(gpu, x, d) {
+    if let Some(ws) = windows(gpu, d).filter(|_| window_aligned(gpu, x)) {
         for w in &ws {
             let xw = windows_of(x, w)?;
             let args: Vec<Arg> = xw.iter().map(Arg::U).chain([Arg::R(alpha), Arg::W(y)]).collect();
@@ -157,8 +166,8 @@ pub fn backward(
     }
     expect_shape("prelu", "dalpha", dalpha, alpha.shape())?;
     let [n, c, s] = d;
-    // Windows need x and dy alike: both are read through them.
-    if let (Some(ws), Some(_)) = (windows(gpu, x, d), windows(gpu, dy, d)) {
+    // Both x and dy are read through the windows.
+    if let Some(ws) = windows(gpu, d).filter(|_| window_aligned(gpu, x) && window_aligned(gpu, dy)) {
         let per = ws[0].per as usize;
         let partial = gpu.scratch(&[n * c * s / 4 / per])?;
         for w in &ws {
