@@ -371,6 +371,41 @@ fn fast_widths_a_multiple_of_four() {
     check_fast(with(conv2d([5, 5], [1, 1], Padding::Same), 1, 3, [1, 5, 4]), 96);
 }
 
+/// The texture family's packings through uniform windows (src/gpu/window.rs; on CPU adapters,
+/// widths a multiple of 4) against the reference kernels, all three passes, and the number of
+/// forward dispatches that shows the windows ran (elsewhere: one packing, one weight packing,
+/// the conv). Cases: a 1x1 conv (never folded) on 2 items of 5 channels (a quad with one real
+/// channel) over planes of 2048 vec4s, packed per item and quad (4 dispatches), dy's 5 channels
+/// padded to 16 for the weight gradient (two quads of none); planes of 4097 vec4s, so channel 1 starts
+/// one vec4 past a binding alignment of 32 bytes and the chunks take 4095 rows, not 4096 (2
+/// dispatches); the first layer's input staged for the direct kernels, 26384 vec4s in two
+/// dispatches of four windows, the second's third window moved back to end at the tensor's end
+/// (its fourth binds it again). Tolerances as in `fast_matches_reference_on_random_shapes`
+/// (sums of at most 2 * 9 * 49 * 16 products here).
+#[test]
+fn packing_through_uniform_windows() {
+    let with = |c: Case, n: usize, ci: usize, co: usize, input: [usize; 3]| Case { n, ci, co, input, kernel: ConvKernel::Texture, ..c };
+    let cases = [
+        (with(conv2d([1, 1], [1, 1], Padding::Same), 2, 5, 5, [1, 64, 128]), 4),
+        (with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 1, 4, 3, [17, 241, 4]), 2),
+        (with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 2, 1, 8, [17, 97, 32]), 2),
+    ];
+    for (seed, (c, windows)) in (300u64..).zip(cases) {
+        let slow = passes(&c, ConvKernel::Reference, seed);
+        let fast = passes(&c, ConvKernel::Texture, seed);
+        for (k, what) in ["forward", "dx", "dw"].iter().enumerate() {
+            assert_close(&format!("{c:?} {what}"), &fast[k], &slow[k], 1e-3, 1e-4);
+        }
+        let g = geom(&c);
+        let (tx, tw, ty) = (zeros(&shape(c.d2, c.n, c.ci, g.input)), zeros(&w_shape(&c)), zeros(&shape(c.d2, c.n, c.co, g.output)));
+        let Op::Conv(op) = c.op else { unreachable!() };
+        let before = gpu().dispatch_count();
+        run(|p| op.forward(ConvKernel::Texture, gpu(), p, &tx, &tw, None, &ty));
+        let want = if gpu().info.device_type == wgpu::DeviceType::Cpu { windows + 2 } else { 3 };
+        assert_eq!(gpu().dispatch_count() - before, want, "forward dispatches of {c:?}");
+    }
+}
+
 /// Runs all three passes of `c` with `kernel` on fixed random inputs; returns (y, dx, dw).
 fn passes(c: &Case, kernel: ConvKernel, seed: u64) -> [Vec<f64>; 3] {
     let g = geom(c);

@@ -44,6 +44,25 @@ fn conv_direct_stage_w4(@builtin(global_invocation_id) gid: vec3<u32>) {
     textureStore(tdst, s.xyz, src4[(s.z * p.ih + s.y) * (p.iw / 4u) + s.x]);
 }
 
+// The same copy (iw a multiple of 4) through uniform windows (conv_tex.wgsl's wc0..wc3 and
+// pdst; see src/gpu/window.rs) on CPU adapters: a dispatch stages texels [first, first + len)
+// (texel t = source vec4 t), window k holding texels first + 4096 k.. from index at[k]. llvmpipe
+// runs all four windows' loads and a select keeps one: still ~4x cheaper than a storage load.
+struct StageWin { at: vec4<u32>, first: u32, len: u32, w4n: u32, ih: u32 }
+@group(0) @binding(0) var<uniform> sk: StageWin;
+
+@compute @workgroup_size(64)
+fn conv_direct_stage_window(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= sk.len) { return; }
+    let k = i >> 12u;
+    let l = sk.at[k] + (i & 4095u);
+    let v = select(select(wc0[l], wc1[l], k == 1u), select(wc2[l], wc3[l], k == 3u), k >= 2u);
+    let t = sk.first + i;
+    let row = t / sk.w4n;
+    textureStore(pdst, vec3<u32>(t % sk.w4n, row % sk.ih, row / sk.ih), v);
+}
+
 // Texel j (W voxels 4j..4j+3) of row zh at depth zd of input channel c of item n in the stage,
 // zero off the grid.
 fn stage_texel(n: u32, c: u32, zd: i32, zh: i32, j: i32) -> vec4<f32> {

@@ -86,6 +86,35 @@ fn conv_fast_pack_tex_w4(@builtin(global_invocation_id) gid: vec3<u32>) {
     textureStore(tdst, at + vec3<u32>(3u, 0u, 0u), vec4<f32>(r0.w, r1.w, r2.w, r3.w));
 }
 
+// The same packing (iw a multiple of 4) reading x through uniform windows (src/gpu/window.rs:
+// a per-lane uniform load costs ~1/16 of a storage load on lavapipe), on CPU adapters. One
+// dispatch per item, channel quad and chunk of whole rows (d, h): window k holds channel
+// 4q + k's vec4s of the chunk from index at[k] (the first `live` are real; channels past ci
+// read channel 0's window and write zeros). One invocation per vec4 of the chunk, as in _w4.
+struct PackWin { at: vec4<u32>, layer0: u32, row0: u32, len4: u32, w4n: u32, oh: u32, live: u32 }
+@group(0) @binding(0) var<uniform> pk: PackWin;
+@group(0) @binding(1) var<uniform> wc0: array<vec4<f32>, 4096>;
+@group(0) @binding(2) var<uniform> wc1: array<vec4<f32>, 4096>;
+@group(0) @binding(3) var<uniform> wc2: array<vec4<f32>, 4096>;
+@group(0) @binding(4) var<uniform> wc3: array<vec4<f32>, 4096>;
+@group(0) @binding(5) var pdst: texture_storage_3d<rgba32float, write>;
+
+@compute @workgroup_size(64)
+fn conv_fast_pack_tex_window(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= pk.len4) { return; }
+    let r0 = select(vec4<f32>(0.0), wc0[pk.at.x + i], pk.live > 0u);
+    let r1 = select(vec4<f32>(0.0), wc1[pk.at.y + i], pk.live > 1u);
+    let r2 = select(vec4<f32>(0.0), wc2[pk.at.z + i], pk.live > 2u);
+    let r3 = select(vec4<f32>(0.0), wc3[pk.at.w + i], pk.live > 3u);
+    let row = pk.row0 + i / pk.w4n;
+    let at = vec3<u32>((i % pk.w4n) * 4u, row % pk.oh, pk.layer0 + row / pk.oh);
+    textureStore(pdst, at, vec4<f32>(r0.x, r1.x, r2.x, r3.x));
+    textureStore(pdst, at + vec3<u32>(1u, 0u, 0u), vec4<f32>(r0.y, r1.y, r2.y, r3.y));
+    textureStore(pdst, at + vec3<u32>(2u, 0u, 0u), vec4<f32>(r0.z, r1.z, r2.z, r3.z));
+    textureStore(pdst, at + vec3<u32>(3u, 0u, 0u), vec4<f32>(r0.w, r1.w, r2.w, r3.w));
+}
+
 // Same parameters as conv_fast_pack_weights; one invocation per texel.
 @group(0) @binding(2) var twdst: texture_storage_2d<rgba32float, write>;
 

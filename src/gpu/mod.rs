@@ -7,6 +7,7 @@ mod kernel;
 mod memo;
 mod pool;
 mod tensor;
+mod window;
 
 pub use kernel::{Arg, Shader, grid_1d, MAX_WORKGROUPS_PER_DIM, SHADER_DIR_ENV};
 pub(crate) use kernel::wgsl;
@@ -15,6 +16,7 @@ pub(crate) use memo::op_done;
 pub use pool::BufferPool;
 pub use tensor::Tensor;
 pub(crate) use tensor::read_staging;
+pub(crate) use window::{WINDOW4, align4, window, windows_pay};
 
 use crate::error::{Error, Result};
 use std::collections::HashMap;

@@ -3,7 +3,7 @@
 
 use super::{expect_shape, reduce};
 use crate::error::{Result, shape_err};
-use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, WINDOW4, align4, grid_1d, wgsl, windows_pay};
 
 const SHADER: Shader = wgsl!("prelu");
 
@@ -58,10 +58,6 @@ fn rows([n, c, s]: [usize; 3]) -> Option<(RowParams, usize)> {
     Some((p, n * c * chunks))
 }
 
-/// Vec4s in one uniform window: 64 KiB, the `max_uniform_buffer_binding_size` every WebGPU
-/// device has at least.
-const WINDOW4: usize = 4096;
-
 /// Windows a dispatch reads (the shader's bindings wx0..wx3 and wdy0..wdy3: nine uniform
 /// buffers with the parameters, within WebGPU's default limit of 12).
 const WINDOWS: usize = 4;
@@ -79,26 +75,17 @@ struct WinParams {
     pad: [u32; 3],
 }
 
-/// A uniform binding's offset alignment, in vec4s.
-fn align4(gpu: &Gpu) -> usize {
-    (gpu.limits.min_uniform_buffer_offset_alignment as usize).div_ceil(16).max(1)
-}
-
 /// The window dispatches over a tensor of dims `[n, c, s]`, in order, where they apply: a
-/// CPU adapter (lavapipe; a GPU's storage loads are fast, and a uniform read at per-lane
-/// addresses may serialise there), `S` split into whole vec4s, the tensor holding at least
+/// CPU adapter ([`windows_pay`]), `S` split into whole vec4s, the tensor holding at least
 /// one window, and every window's offset within it suiting a uniform binding (the tensor's
 /// own offset is [`window_aligned`]'s to check). The tensor's last window ends at its end
 /// (so it may overlap the one before); `per`, the vec4s an invocation takes, divides both a
 /// row and a window.
 fn windows(gpu: &Gpu, [n, c, s]: [usize; 3]) -> Option<Vec<WinParams>> {
     let total4 = n * c * s / 4;
-    let l = &gpu.limits;
     let last_base = total4.checked_sub(WINDOW4)?;
-    let fits = gpu.info.device_type == wgpu::DeviceType::Cpu
+    let fits = windows_pay(gpu, 2 * WINDOWS)
         && s.is_multiple_of(4)
-        && (l.max_uniform_buffer_binding_size as usize) >= WINDOW4 * 16
-        && l.max_uniform_buffers_per_shader_stage as usize > 2 * WINDOWS
         && (total4.is_multiple_of(WINDOW4) || last_base.is_multiple_of(align4(gpu)));
     if !fits {
         return None;
