@@ -89,8 +89,9 @@ fn conv_fast_pack_tex_w4(@builtin(global_invocation_id) gid: vec3<u32>) {
 // The same packing (iw a multiple of 4) reading x through uniform windows (src/gpu/window.rs:
 // a per-lane uniform load costs ~1/16 of a storage load on lavapipe), on CPU adapters. One
 // dispatch per item, channel quad and chunk of whole rows (d, h): window k holds channel
-// 4q + k's vec4s of the chunk from index at[k] (the first `live` are real; channels past ci
-// read channel 0's window and write zeros). One invocation per vec4 of the chunk, as in _w4.
+// 4q + k's vec4s of the chunk from index at[k] (the first `live`, at least one, are real;
+// channels past ci read channel 0's window and write zeros). One invocation per vec4 of the
+// chunk, as in _w4.
 struct PackWin { at: vec4<u32>, layer0: u32, row0: u32, len4: u32, w4n: u32, oh: u32, live: u32 }
 @group(0) @binding(0) var<uniform> pk: PackWin;
 @group(0) @binding(1) var<uniform> wc0: array<vec4<f32>, 4096>;
@@ -103,7 +104,7 @@ struct PackWin { at: vec4<u32>, layer0: u32, row0: u32, len4: u32, w4n: u32, oh:
 fn conv_fast_pack_tex_window(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
     if (i >= pk.len4) { return; }
-    let r0 = select(vec4<f32>(0.0), wc0[pk.at.x + i], pk.live > 0u);
+    let r0 = wc0[pk.at.x + i];
     let r1 = select(vec4<f32>(0.0), wc1[pk.at.y + i], pk.live > 1u);
     let r2 = select(vec4<f32>(0.0), wc2[pk.at.z + i], pk.live > 2u);
     let r3 = select(vec4<f32>(0.0), wc3[pk.at.w + i], pk.live > 3u);

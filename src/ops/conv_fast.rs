@@ -275,9 +275,10 @@ struct PackWin {
 /// The dispatches of `pack_x`'s texture packing through uniform windows, each with its four
 /// windows (channels 4q..4q+3 of one item over a chunk of whole rows), where they apply: a
 /// CPU adapter ([`windows_pay`]), a width of whole vec4s and every window placeable. Chunks
-/// take as many rows as a window holds (quads wholly past the channels, as dy's 16-channel
-/// padding makes, read channel 0 and write zeros), or one row fewer where the binding alignment moves a
-/// window's start back.
+/// take as many rows as a window holds, or one row fewer where the binding alignment moves a
+/// window's start back. Quads wholly past the channels (dy's padding to 16 channels for the
+/// weight gradient) are not written: they only meet the padded output channels, whose partial
+/// sums `conv_fast_weight_sum` drops, and each dispatch costs ~30 us.
 fn pack_windows(gpu: &Gpu, g: &Geometry, x: &Tensor, cpad: usize) -> Result<Option<Vec<(PackWin, Vec<Tensor>)>>> {
     let [id, ih, iw] = g.input;
     if !iw.is_multiple_of(4) || !windows_pay(gpu, 4) || iw / 4 > WINDOW4 {
@@ -300,6 +301,9 @@ fn pack_windows(gpu: &Gpu, g: &Geometry, x: &Tensor, cpad: usize) -> Result<Opti
             let len4 = (chunk.min(rows - row0) * w4n) as u32;
             for (n, q) in (0..g.n).flat_map(|n| (0..cpad / 4).map(move |q| (n, q))) {
                 let live = g.ci.saturating_sub(4 * q).min(4);
+                if live == 0 {
+                    continue;
+                }
                 let mut at = [0; 4];
                 let mut windows = Vec::with_capacity(4);
                 for k in 0..4 {
