@@ -258,6 +258,9 @@ fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded,
 /// than a uniform one, `rendernet bench --operands` on a Zen 3).
 const MIN_CHUNK4: usize = 2048;
 
+/// Window dispatches: each one's parameters and the windows it binds, in binding order.
+type Plan<P> = Vec<(P, Vec<Tensor>)>;
+
 /// Parameters of one `conv_fast_pack_tex_window` dispatch (see the shader).
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -279,7 +282,7 @@ struct PackWin {
 /// window's start back. Quads wholly past the channels (dy's padding to 16 channels for the
 /// weight gradient) are not written: they only meet the padded output channels, whose partial
 /// sums `conv_fast_weight_sum` drops, and each dispatch costs ~30 us.
-fn pack_windows(gpu: &Gpu, g: &Geometry, x: &Tensor, cpad: usize) -> Result<Option<Vec<(PackWin, Vec<Tensor>)>>> {
+fn pack_windows(gpu: &Gpu, g: &Geometry, x: &Tensor, cpad: usize) -> Result<Option<Plan<PackWin>>> {
     let [id, ih, iw] = g.input;
     if !iw.is_multiple_of(4) || !windows_pay(gpu, 4) || iw / 4 > WINDOW4 {
         return Ok(None);
@@ -306,10 +309,10 @@ fn pack_windows(gpu: &Gpu, g: &Geometry, x: &Tensor, cpad: usize) -> Result<Opti
                 }
                 let mut at = [0; 4];
                 let mut windows = Vec::with_capacity(4);
-                for k in 0..4 {
+                for (k, at_k) in at.iter_mut().enumerate() {
                     let c = if k < live { 4 * q + k } else { 0 };
                     let Some((t, a)) = window(gpu, x, (n * g.ci + c) * plane4 + row0 * w4n, len4 as usize)? else { continue 'sizes };
-                    at[k] = a;
+                    *at_k = a;
                     windows.push(t);
                 }
                 let layer0 = ((n * cpad / 4 + q) * id) as u32;
@@ -354,7 +357,7 @@ struct StageWin {
 /// The dispatches of `stage_x` through uniform windows (four consecutive windows each, a
 /// window past the end binding the last again), where they apply: a CPU adapter, a width of whole
 /// vec4s and every window placeable.
-fn stage_windows(gpu: &Gpu, g: &Geometry, x: &Tensor) -> Result<Option<Vec<(StageWin, Vec<Tensor>)>>> {
+fn stage_windows(gpu: &Gpu, g: &Geometry, x: &Tensor) -> Result<Option<Plan<StageWin>>> {
     let [_, ih, iw] = g.input;
     if !iw.is_multiple_of(4) || !windows_pay(gpu, 4) {
         return Ok(None);
@@ -364,10 +367,10 @@ fn stage_windows(gpu: &Gpu, g: &Geometry, x: &Tensor) -> Result<Option<Vec<(Stag
     for first in (0..total).step_by(4 * WINDOW4) {
         let len = (4 * WINDOW4).min(total - first);
         let (mut at, mut windows) = ([0; 4], Vec::with_capacity(4));
-        for k in 0..4 {
+        for (k, at_k) in at.iter_mut().enumerate() {
             let start = first + (k * WINDOW4).min(len - 1) / WINDOW4 * WINDOW4;
             let Some((t, a)) = window(gpu, x, start, WINDOW4.min(first + len - start))? else { return Ok(None) };
-            at[k] = a;
+            *at_k = a;
             windows.push(t);
         }
         plan.push((StageWin { at, first: first as u32, len: len as u32, w4n: (iw / 4) as u32, ih: ih as u32 }, windows));
