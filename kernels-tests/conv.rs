@@ -406,15 +406,54 @@ fn packing_through_uniform_windows() {
     }
 }
 
+/// The texture family's weight packing through uniform windows (`conv_fast_pack_weights_tex_window`,
+/// CPU adapters) against the reference kernels, all three passes: weights of two windows read
+/// flipped for a stride-2 backward input (four phases' sub-kernels); weights of less than one
+/// window that are a view into a larger buffer (as in the flat parameter buffer; offset 4128
+/// bytes), at stride (1, 1, 2); weights of four windows, the
+/// last moved back to end at the buffer's end. Tolerances as in
+/// `fast_matches_reference_on_random_shapes`.
+#[test]
+fn weight_packing_through_uniform_windows() {
+    let with = |c: Case, ci: usize, co: usize, input: [usize; 3]| Case { n: 1, ci, co, input, kernel: ConvKernel::Texture, ..c };
+    let cases = [
+        (with(conv2d([3, 3], [2, 2], Padding::Same), 64, 40, [1, 7, 9]), None),
+        (with(conv3d([3, 3, 3], [1, 1, 2], Padding::Same), 12, 20, [3, 5, 6]), Some(1032)),
+        (with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 40, 48, [3, 4, 5]), None),
+    ];
+    for (seed, (c, w_at)) in (320u64..).zip(cases) {
+        let slow = passes_with(&c, ConvKernel::Reference, seed, w_at);
+        let fast = passes_with(&c, ConvKernel::Texture, seed, w_at);
+        for (k, what) in ["forward", "dx", "dw"].iter().enumerate() {
+            assert_close(&format!("{c:?} weights at {w_at:?}: {what}"), &fast[k], &slow[k], 1e-3, 1e-4);
+        }
+    }
+}
+
 /// Runs all three passes of `c` with `kernel` on fixed random inputs; returns (y, dx, dw).
 fn passes(c: &Case, kernel: ConvKernel, seed: u64) -> [Vec<f64>; 3] {
+    passes_with(c, kernel, seed, None)
+}
+
+/// [`passes`] with the weights, where `w_at` says so, a view at that value offset of a buffer
+/// 16384 values longer than they need.
+fn passes_with(c: &Case, kernel: ConvKernel, seed: u64, w_at: Option<usize>) -> [Vec<f64>; 3] {
     let g = geom(c);
     let (xs, ws, ys) = (shape(c.d2, c.n, c.ci, g.input), w_shape(c), shape(c.d2, c.n, c.co, g.output));
     let numel = |s: &[usize]| s.iter().product::<usize>();
     let mut rng = Rng(seed);
     let (x, w) = (rng.vec(numel(&xs), -1.0, 1.0), rng.vec(numel(&ws), -1.0, 1.0));
     let (b, r) = (rng.vec(c.co, -1.0, 1.0), rng.vec(numel(&ys), -1.0, 1.0));
-    let (tx, tw, tb, tr) = (upload(&xs, &x), upload(&ws, &w), upload(&[c.co], &b), upload(&ys, &r));
+    let tw = match w_at {
+        None => upload(&ws, &w),
+        Some(at) => {
+            let big = zeros(&[at + w.len() + 16384]);
+            let t = rendernet::Tensor::view(big.into_buffer(), at as u64 * 4, &ws).unwrap();
+            t.write(gpu(), &w.iter().map(|&v| v as f32).collect::<Vec<_>>()).unwrap();
+            t
+        }
+    };
+    let (tx, tb, tr) = (upload(&xs, &x), upload(&[c.co], &b), upload(&ys, &r));
     let (ty, tdx, tdw) = (zeros(&ys), zeros(&xs), zeros(&ws));
     run(|p| match c.op {
         Op::Conv(op) => {

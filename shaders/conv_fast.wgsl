@@ -53,6 +53,9 @@ struct Params {
     // (n * co + c) * ycs + yoff + od * ysd + oh * ysh + ow * ysw (a phase of a larger tensor
     // for strided backward input; the dense layout otherwise).
     ycs: u32, ysd: u32, ysh: u32, ysw: u32, yoff: u32,
+    // conv_fast_pack_weights_tex_window (conv_tex.wgsl): the index of each window's first vec4
+    // in its binding.
+    wat0: u32, wat1: u32, wat2: u32, wat3: u32,
 }
 @group(0) @binding(0) var<uniform> p: Params;
 
@@ -158,22 +161,28 @@ fn conv_fast_pack_folded(@builtin(global_invocation_id) gid: vec3<u32>, @builtin
 @group(0) @binding(1) var<storage, read> wsrc: array<f32>;
 @group(0) @binding(2) var<storage, read_write> wdst: array<f32>;
 
-// Packed weight of dispatch tap `tap`, input channel `c`, output channel `o` (zero past the
-// real channel counts or the source kernel's edge).
-fn packed_weight(tap: u32, c: u32, o: u32) -> f32 {
+// Source index of the packed weight of dispatch tap `tap`, input channel `c`, output channel
+// `o`, or -1 where it is zero (past the real channel counts or the source kernel's edge).
+fn weight_index(tap: u32, c: u32, o: u32) -> i32 {
     let taps = p.kd * p.kh * p.kw;
-    if (o >= p.co || c >= p.ci) { return 0.0; }
+    if (o >= p.co || c >= p.ci) { return -1; }
     if (p.flip == 0u) {
         let f = max(p.fold, 1u);
-        return wsrc[(o * (p.ci / f) + c / f) * taps * f + tap * f + c % f];
+        return i32((o * (p.ci / f) + c / f) * taps * f + tap * f + c % f);
     }
     let kd = p.pd + (p.kd - 1u - tap / (p.kh * p.kw)) * p.sd;
     let kh = p.ph + (p.kh - 1u - (tap / p.kw) % p.kh) * p.sh;
     let kw = p.pw + (p.kw - 1u - tap % p.kw) * p.sw;
     if (kd < p.id && kh < p.ih && kw < p.iw) {
-        return wsrc[(c * p.co + o) * p.id * p.ih * p.iw + (kd * p.ih + kh) * p.iw + kw];
+        return i32((c * p.co + o) * p.id * p.ih * p.iw + (kd * p.ih + kh) * p.iw + kw);
     }
-    return 0.0;
+    return -1;
+}
+
+// The packed weight of (tap, c, o), read from `wsrc`.
+fn packed_weight(tap: u32, c: u32, o: u32) -> f32 {
+    let i = weight_index(tap, c, o);
+    return select(0.0, wsrc[max(i, 0)], i >= 0);
 }
 
 @compute @workgroup_size(64)

@@ -135,6 +135,36 @@ fn conv_fast_pack_weights_tex(@builtin(global_invocation_id) gid: vec3<u32>, @bu
     textureStore(twdst, vec2<u32>(x, y), v);
 }
 
+// The same packing reading the weights through up to four uniform windows (wc0..wc3, window
+// k holding source vec4s from 4096 k on, from index wat_k of its binding), on CPU adapters.
+fn window_weight(tap: u32, c: u32, o: u32) -> f32 {
+    let i = weight_index(tap, c, o);
+    let v4 = u32(max(i, 0)) >> 2u;
+    let k = v4 >> 12u;
+    let at = select(select(p.wat0, p.wat1, k == 1u), select(p.wat2, p.wat3, k == 3u), k >= 2u);
+    let l = at + (v4 & 4095u);
+    let v = select(select(wc0[l], wc1[l], k == 1u), select(wc2[l], wc3[l], k == 3u), k >= 2u);
+    return select(0.0, v[u32(max(i, 0)) & 3u], i >= 0);
+}
+
+@group(0) @binding(5) var wtdst: texture_storage_2d<rgba32float, write>;
+
+@compute @workgroup_size(64)
+fn conv_fast_pack_weights_tex_window(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = lin(gid, nwg);
+    if (i >= p.total) { return; }
+    let width = p.co16 * 16u;
+    let x = i % width;
+    let y = i / width;
+    let q = y % (p.cpad / 4u);
+    let tap = y / (p.cpad / 4u);
+    let c = 4u * q + (x % 16u) / 4u;
+    let o = (x / 16u) * 16u + (x % 4u) * 4u;
+    let v = vec4<f32>(window_weight(tap, c, o), window_weight(tap, c, o + 1u),
+                      window_weight(tap, c, o + 2u), window_weight(tap, c, o + 3u));
+    textureStore(wtdst, vec2<u32>(x, y), v);
+}
+
 // ---- forward: a subgroup of 8 lanes = 8 outputs along W; each lane 8 rows (H) x 16 channels --
 // 8 rows rather than 4: each shared weight set then feeds twice the FMAs (measured 1.25x on
 // conv3d 16->16 3^3 on 32^3; the accumulators live in memory either way on lavapipe).

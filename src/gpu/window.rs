@@ -28,18 +28,20 @@ pub(crate) fn align4(gpu: &Gpu) -> usize {
 
 /// A window of `t` that holds its vec4s `[start4, start4 + len4)`: the 64 KiB view to bind and
 /// the index of vec4 `start4` in it. The window starts at `start4` where the alignment allows,
-/// else just before it, and no later than one window before `t`'s end, so it never leaves `t`.
-/// `None` where that cannot be: `t` under one window, not whole vec4s from a 16-byte offset, or
-/// the range past what one aligned window reaches.
+/// else just before it, and no later than one window before the end of `t`'s buffer (so a
+/// small view of a large buffer, as a parameter in the flat parameter buffer, has windows
+/// too; the kernels never use what lies past `t`). `None` where that cannot be: a buffer under
+/// one window, `t` not whole vec4s from a 16-byte offset, or the range past what one aligned
+/// window reaches.
 pub(crate) fn window(gpu: &Gpu, t: &Tensor, start4: usize, len4: usize) -> Result<Option<(Tensor, u32)>> {
-    let total4 = t.numel() / 4;
-    if !t.numel().is_multiple_of(4) || !t.offset().is_multiple_of(16) || total4 < WINDOW4 || start4 + len4 > total4 {
+    let (off4, buf4) = (t.offset() as usize / 16, t.buffer().size() as usize / 16);
+    if !t.numel().is_multiple_of(4) || !t.offset().is_multiple_of(16) || buf4 < WINDOW4 || start4 + len4 > t.numel() / 4 {
         return Ok(None);
     }
     let align = align4(gpu);
-    let first4 = t.offset() as usize / 16 + start4.min(total4 - WINDOW4);
+    let first4 = (off4 + start4).min(buf4 - WINDOW4);
     let base4 = first4 - first4 % align;
-    let at = t.offset() as usize / 16 + start4 - base4;
+    let at = off4 + start4 - base4;
     if at + len4 > WINDOW4 {
         return Ok(None);
     }

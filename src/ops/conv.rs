@@ -167,6 +167,8 @@ pub(crate) struct Params {
     pub ysh: u32,
     pub ysw: u32,
     pub yoff: u32,
+    /// `conv_fast_pack_weights_tex_window`: where each window's first vec4 lies in its binding.
+    pub wat: [u32; 4],
 }
 
 impl Conv {

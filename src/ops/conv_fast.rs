@@ -378,6 +378,25 @@ fn stage_windows(gpu: &Gpu, g: &Geometry, x: &Tensor) -> Result<Option<Plan<Stag
     Ok(Some(plan))
 }
 
+/// The (up to) four windows `conv_fast_pack_weights_tex_window` reads `w` through and where
+/// each one's first vec4 lies in its binding, where they apply: a CPU adapter, `w` within four
+/// windows (64k values; a window past its end binds the last again) and every window
+/// placeable (a small `w` needs a buffer of at least 64 KiB, as the flat parameter buffer).
+fn weight_windows(gpu: &Gpu, w: &Tensor) -> Result<Option<([u32; 4], Vec<Tensor>)>> {
+    let total4 = w.numel().div_ceil(4);
+    if !windows_pay(gpu, 4) || total4 > 4 * WINDOW4 || !w.numel().is_multiple_of(4) {
+        return Ok(None);
+    }
+    let (mut wat, mut windows) = ([0; 4], Vec::with_capacity(4));
+    for (k, at) in wat.iter_mut().enumerate() {
+        let start = (k * WINDOW4).min(total4 - 1) / WINDOW4 * WINDOW4;
+        let Some((t, a)) = window(gpu, w, start, WINDOW4.min(total4 - start))? else { return Ok(None) };
+        *at = a;
+        windows.push(t);
+    }
+    Ok(Some((wat, windows)))
+}
+
 /// Weights packed for the packing parameters `p` (see `pack_weights`), as a texture or buffer.
 fn pack_w(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: &Tensor, tex: bool) -> Result<Packed> {
     if !tex {
@@ -386,6 +405,12 @@ fn pack_w(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: &Tensor, te
     let width = p.co16 as usize * 16;
     let height = (p.kd * p.kh * p.kw) as usize * p.cpad as usize / 4;
     let (view, dim) = texture(gpu, [width, height, 1], wgpu::TextureDimension::D2);
+    if let Some((wat, windows)) = weight_windows(gpu, w)? {
+        let args: Vec<Arg> = windows.iter().map(Arg::U).chain([Arg::StorageTexture(&view, dim)]).collect();
+        let p = Params { wat, total: (width * height) as u32, ..p };
+        gpu.dispatch(pass, TEX_SHADER, "conv_fast_pack_weights_tex_window", &p, &args, grid_1d((width * height) as u64, 64)?)?;
+        return Ok(Packed::Texture(view, dim));
+    }
     dispatch(gpu, pass, "conv_fast_pack_weights_tex", p, &[Arg::R(w), Arg::StorageTexture(&view, dim)], width * height)?;
     Ok(Packed::Texture(view, dim))
 }
