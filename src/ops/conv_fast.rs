@@ -5,12 +5,13 @@
 
 use super::conv::{Geometry, Params};
 use crate::error::Result;
-use crate::gpu::{Arg, Gpu, Shader, Tensor, WINDOW4, align4, grid_1d, wgsl, window, windows_pay};
+use super::conv_window;
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
 const SHADER: Shader = wgsl!("conv_fast");
 /// The texture family: `conv_tex.wgsl` uses `conv_fast.wgsl`'s parameters and helpers, and
 /// `conv_direct.wgsl` (the direct kernels of convs with few input channels) both files'.
-const TEX_SHADER: Shader = wgsl!("conv_tex": "conv_fast", "conv_tex", "conv_direct");
+pub(super) const TEX_SHADER: Shader = wgsl!("conv_tex": "conv_fast", "conv_tex", "conv_direct");
 
 /// The tiled kernels' parameters for dispatch geometry `g` with `cpad` packed channels.
 fn params(g: &Geometry, cpad: usize) -> Params {
@@ -236,11 +237,7 @@ fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded,
     debug_assert_eq!(f.fold(), 1, "the texture packing does not fold");
     let [id, ih, iw] = g.input;
     let (view, dim) = texture(gpu, [iw, ih, g.n * cpad / 4 * id], wgpu::TextureDimension::D3);
-    if let Some(plan) = pack_windows(gpu, g, x, cpad)? {
-        for (pk, windows) in &plan {
-            let args: Vec<Arg> = windows.iter().map(Arg::U).chain([Arg::StorageTexture(&view, dim)]).collect();
-            gpu.dispatch(pass, TEX_SHADER, "conv_fast_pack_tex_window", pk, &args, grid_1d(pk.len4 as u64, 64)?)?;
-        }
+    if conv_window::pack_x(gpu, pass, g, x, cpad, &view, dim)? {
         return Ok(Packed::Texture(view, dim));
     }
     let p = folded_params(g, &Folded::none(*g), cpad);
@@ -253,148 +250,18 @@ fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded,
     Ok(Packed::Texture(view, dim))
 }
 
-/// The fewest vec4s of a channel plane that `pack_windows` packs through windows: each
-/// dispatch then saves ~8x what it costs (~30 us; a storage vec4 load ~0.2 us per 8 lanes more
-/// than a uniform one, `rendernet bench --operands` on a Zen 3).
-const MIN_CHUNK4: usize = 2048;
-
-/// Window dispatches: each one's parameters and the windows it binds, in binding order.
-type Plan<P> = Vec<(P, Vec<Tensor>)>;
-
-/// Parameters of one `conv_fast_pack_tex_window` dispatch (see the shader).
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct PackWin {
-    at: [u32; 4],
-    layer0: u32,
-    row0: u32,
-    len4: u32,
-    w4n: u32,
-    oh: u32,
-    live: u32,
-    pad: [u32; 2],
-}
-
-/// The dispatches of `pack_x`'s texture packing through uniform windows, each with its four
-/// windows (channels 4q..4q+3 of one item over a chunk of whole rows), where they apply: a
-/// CPU adapter ([`windows_pay`]), a width of whole vec4s and every window placeable. Chunks
-/// take as many rows as a window holds, or one row fewer where the binding alignment moves a
-/// window's start back. Quads wholly past the channels (dy's padding to 16 channels for the
-/// weight gradient) are not written: they only meet the padded output channels, whose partial
-/// sums `conv_fast_weight_sum` drops, and each dispatch costs ~30 us.
-fn pack_windows(gpu: &Gpu, g: &Geometry, x: &Tensor, cpad: usize) -> Result<Option<Plan<PackWin>>> {
-    let [id, ih, iw] = g.input;
-    if !iw.is_multiple_of(4) || !windows_pay(gpu, 4) || iw / 4 > WINDOW4 {
-        return Ok(None);
-    }
-    let w4n = iw / 4;
-    let (rows, plane4) = (id * ih, id * ih * iw / 4);
-    // A dispatch per quad and chunk: where planes are small (the projection's 512 channels of
-    // 32 x 32) their cost outweighs the loads saved.
-    if plane4 < MIN_CHUNK4 {
-        return Ok(None);
-    }
-    let fewer = (WINDOW4 + 1 - align4(gpu)) / w4n;
-    'sizes: for chunk in [WINDOW4 / w4n, fewer] {
-        if chunk == 0 {
-            continue;
-        }
-        let mut plan = Vec::new();
-        for row0 in (0..rows).step_by(chunk) {
-            let len4 = (chunk.min(rows - row0) * w4n) as u32;
-            for (n, q) in (0..g.n).flat_map(|n| (0..cpad / 4).map(move |q| (n, q))) {
-                let live = g.ci.saturating_sub(4 * q).min(4);
-                if live == 0 {
-                    continue;
-                }
-                let mut at = [0; 4];
-                let mut windows = Vec::with_capacity(4);
-                for (k, at_k) in at.iter_mut().enumerate() {
-                    let c = if k < live { 4 * q + k } else { 0 };
-                    let Some((t, a)) = window(gpu, x, (n * g.ci + c) * plane4 + row0 * w4n, len4 as usize)? else { continue 'sizes };
-                    *at_k = a;
-                    windows.push(t);
-                }
-                let layer0 = ((n * cpad / 4 + q) * id) as u32;
-                let pk = PackWin { at, layer0, row0: row0 as u32, len4, w4n: w4n as u32, oh: ih as u32, live: live as u32, pad: [0; 2] };
-                plan.push((pk, windows));
-            }
-        }
-        return Ok(Some(plan));
-    }
-    Ok(None)
-}
-
 /// `x` ([N, C, input...] of `g`) copied into a 3D texture of 4 voxels along W a texel, which
 /// the direct kernels read (see `conv_direct.wgsl`); `p` has `g`'s sizes.
 fn stage_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor, p: &Params) -> Result<wgpu::TextureView> {
     let [id, ih, iw] = g.input;
     let (view, dim) = texture(gpu, [iw.div_ceil(4), ih, g.n * g.ci * id], wgpu::TextureDimension::D3);
-    if let Some(plan) = stage_windows(gpu, g, x)? {
-        for (sw, windows) in &plan {
-            let args: Vec<Arg> = windows.iter().map(Arg::U).chain([Arg::StorageTexture(&view, dim)]).collect();
-            gpu.dispatch(pass, TEX_SHADER, "conv_direct_stage_window", sw, &args, grid_1d(sw.len as u64, 64)?)?;
-        }
+    if conv_window::stage_x(gpu, pass, g, x, &view, dim)? {
         return Ok(view);
     }
     let entry = if iw % 4 == 0 { "conv_direct_stage_w4" } else { "conv_direct_stage" };
     let grid = [(iw.div_ceil(4) * ih).div_ceil(64) as u32, id as u32, (g.n * g.ci) as u32];
     gpu.dispatch(pass, TEX_SHADER, entry, p, &[Arg::R(x), Arg::StorageTexture(&view, dim)], grid)?;
     Ok(view)
-}
-
-/// Parameters of one `conv_direct_stage_window` dispatch (see the shader).
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct StageWin {
-    at: [u32; 4],
-    first: u32,
-    len: u32,
-    w4n: u32,
-    ih: u32,
-}
-
-/// The dispatches of `stage_x` through uniform windows (four consecutive windows each, a
-/// window past the end binding the last again), where they apply: a CPU adapter, a width of whole
-/// vec4s and every window placeable.
-fn stage_windows(gpu: &Gpu, g: &Geometry, x: &Tensor) -> Result<Option<Plan<StageWin>>> {
-    let [_, ih, iw] = g.input;
-    if !iw.is_multiple_of(4) || !windows_pay(gpu, 4) {
-        return Ok(None);
-    }
-    let total = x.numel() / 4;
-    let mut plan = Vec::new();
-    for first in (0..total).step_by(4 * WINDOW4) {
-        let len = (4 * WINDOW4).min(total - first);
-        let (mut at, mut windows) = ([0; 4], Vec::with_capacity(4));
-        for (k, at_k) in at.iter_mut().enumerate() {
-            let start = first + (k * WINDOW4).min(len - 1) / WINDOW4 * WINDOW4;
-            let Some((t, a)) = window(gpu, x, start, WINDOW4.min(first + len - start))? else { return Ok(None) };
-            *at_k = a;
-            windows.push(t);
-        }
-        plan.push((StageWin { at, first: first as u32, len: len as u32, w4n: (iw / 4) as u32, ih: ih as u32 }, windows));
-    }
-    Ok(Some(plan))
-}
-
-/// The (up to) four windows `conv_fast_pack_weights_tex_window` reads `w` through and where
-/// each one's first vec4 lies in its binding, where they apply: a CPU adapter, `w` within four
-/// windows (64k values; a window past its end binds the last again) and every window
-/// placeable (a small `w` needs a buffer of at least 64 KiB, as the flat parameter buffer).
-fn weight_windows(gpu: &Gpu, w: &Tensor) -> Result<Option<([u32; 4], Vec<Tensor>)>> {
-    let total4 = w.numel().div_ceil(4);
-    if !windows_pay(gpu, 4) || total4 > 4 * WINDOW4 || !w.numel().is_multiple_of(4) {
-        return Ok(None);
-    }
-    let (mut wat, mut windows) = ([0; 4], Vec::with_capacity(4));
-    for (k, at) in wat.iter_mut().enumerate() {
-        let start = (k * WINDOW4).min(total4 - 1) / WINDOW4 * WINDOW4;
-        let Some((t, a)) = window(gpu, w, start, WINDOW4.min(total4 - start))? else { return Ok(None) };
-        *at = a;
-        windows.push(t);
-    }
-    Ok(Some((wat, windows)))
 }
 
 /// Weights packed for the packing parameters `p` (see `pack_weights`), as a texture or buffer.
@@ -405,10 +272,7 @@ fn pack_w(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: &Tensor, te
     let width = p.co16 as usize * 16;
     let height = (p.kd * p.kh * p.kw) as usize * p.cpad as usize / 4;
     let (view, dim) = texture(gpu, [width, height, 1], wgpu::TextureDimension::D2);
-    if let Some((wat, windows)) = weight_windows(gpu, w)? {
-        let args: Vec<Arg> = windows.iter().map(Arg::U).chain([Arg::StorageTexture(&view, dim)]).collect();
-        let p = Params { wat, total: (width * height) as u32, ..p };
-        gpu.dispatch(pass, TEX_SHADER, "conv_fast_pack_weights_tex_window", &p, &args, grid_1d((width * height) as u64, 64)?)?;
+    if conv_window::pack_w(gpu, pass, p, w, &view, dim, width * height)? {
         return Ok(Packed::Texture(view, dim));
     }
     dispatch(gpu, pass, "conv_fast_pack_weights_tex", p, &[Arg::R(w), Arg::StorageTexture(&view, dim)], width * height)?;
