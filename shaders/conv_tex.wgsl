@@ -119,20 +119,26 @@ fn conv_fast_pack_tex_window(@builtin(global_invocation_id) gid: vec3<u32>) {
 // Same parameters as conv_fast_pack_weights; one invocation per texel.
 @group(0) @binding(2) var twdst: texture_storage_2d<rgba32float, write>;
 
-@compute @workgroup_size(64)
-fn conv_fast_pack_weights_tex(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let i = lin(gid, nwg);
-    if (i >= p.total) { return; }
+// Weight texel i: its position, and the tap, input channel and first of the 4 output
+// channels it holds.
+struct WeightTexel { at: vec2<u32>, tap: u32, c: u32, o: u32 }
+
+fn weight_texel(i: u32) -> WeightTexel {
     let width = p.co16 * 16u;
     let x = i % width;
     let y = i / width;
     let q = y % (p.cpad / 4u);
-    let tap = y / (p.cpad / 4u);
-    let c = 4u * q + (x % 16u) / 4u;
-    let o = (x / 16u) * 16u + (x % 4u) * 4u;
-    let v = vec4<f32>(packed_weight(tap, c, o), packed_weight(tap, c, o + 1u),
-                      packed_weight(tap, c, o + 2u), packed_weight(tap, c, o + 3u));
-    textureStore(twdst, vec2<u32>(x, y), v);
+    return WeightTexel(vec2<u32>(x, y), y / (p.cpad / 4u), 4u * q + (x % 16u) / 4u, (x / 16u) * 16u + (x % 4u) * 4u);
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_pack_weights_tex(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = lin(gid, nwg);
+    if (i >= p.total) { return; }
+    let t = weight_texel(i);
+    let v = vec4<f32>(packed_weight(t.tap, t.c, t.o), packed_weight(t.tap, t.c, t.o + 1u),
+                      packed_weight(t.tap, t.c, t.o + 2u), packed_weight(t.tap, t.c, t.o + 3u));
+    textureStore(twdst, t.at, v);
 }
 
 // The same packing reading the weights through up to four uniform windows (wc0..wc3, window
@@ -153,16 +159,10 @@ fn window_weight(tap: u32, c: u32, o: u32) -> f32 {
 fn conv_fast_pack_weights_tex_window(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = lin(gid, nwg);
     if (i >= p.total) { return; }
-    let width = p.co16 * 16u;
-    let x = i % width;
-    let y = i / width;
-    let q = y % (p.cpad / 4u);
-    let tap = y / (p.cpad / 4u);
-    let c = 4u * q + (x % 16u) / 4u;
-    let o = (x / 16u) * 16u + (x % 4u) * 4u;
-    let v = vec4<f32>(window_weight(tap, c, o), window_weight(tap, c, o + 1u),
-                      window_weight(tap, c, o + 2u), window_weight(tap, c, o + 3u));
-    textureStore(wtdst, vec2<u32>(x, y), v);
+    let t = weight_texel(i);
+    let v = vec4<f32>(window_weight(t.tap, t.c, t.o), window_weight(t.tap, t.c, t.o + 1u),
+                      window_weight(t.tap, t.c, t.o + 2u), window_weight(t.tap, t.c, t.o + 3u));
+    textureStore(wtdst, t.at, v);
 }
 
 // ---- forward: a subgroup of 8 lanes = 8 outputs along W; each lane 8 rows (H) x 16 channels --
