@@ -187,8 +187,8 @@ fn stage_windows(gpu: &Gpu, g: &Geometry, x: &Tensor) -> Result<Option<Plan<Stag
 /// windows (64k values; a window past its end binds the last again) and every window
 /// placeable (a small `w` needs a buffer of at least 64 KiB, as the flat parameter buffer).
 fn weight_windows(gpu: &Gpu, w: &Tensor) -> Result<Option<([u32; 4], Vec<Tensor>)>> {
-    let total4 = w.numel().div_ceil(4);
-    if !windows_pay(gpu, 4) || total4 > 4 * WINDOW4 || !w.numel().is_multiple_of(4) {
+    let total4 = w.numel() / 4;
+    if !windows_pay(gpu, 4) || total4 == 0 || total4 > 4 * WINDOW4 || !w.numel().is_multiple_of(4) {
         return Ok(None);
     }
     let (mut wat, mut windows) = ([0; 4], Vec::with_capacity(4));
