@@ -100,8 +100,8 @@ struct PackWin {
 /// The dispatches of `pack_x`'s texture packing through uniform windows, each with its four
 /// windows (channels 4q..4q+3 of one item over a chunk of whole rows), where they apply: a
 /// CPU adapter ([`windows_pay`]), a width of whole vec4s and every window placeable. Chunks
-/// take as many rows as a window holds, or one row fewer where the binding alignment moves a
-/// window's start back. Quads wholly past the channels (dy's padding to 16 channels for the
+/// take as many rows as a window holds or, where the binding alignment moves a window's start
+/// back, as many as fit beside that slack (usually one row fewer). Quads wholly past the channels (dy's padding to 16 channels for the
 /// weight gradient) are not written: they only meet the padded output channels, whose partial
 /// sums `conv_fast_weight_sum` drops, and each dispatch costs ~30 us.
 fn pack_windows(gpu: &Gpu, g: &Geometry, x: &Tensor, cpad: usize) -> Result<Option<Plan<PackWin>>> {
