@@ -170,13 +170,7 @@ fn stage_windows(gpu: &Gpu, g: &Geometry, x: &Tensor) -> Result<Option<Plan<Stag
     let mut plan = Vec::new();
     for first in (0..total).step_by(4 * WINDOW4) {
         let len = (4 * WINDOW4).min(total - first);
-        let (mut at, mut windows) = ([0; 4], Vec::with_capacity(4));
-        for (k, at_k) in at.iter_mut().enumerate() {
-            let start = first + (k * WINDOW4).min(len - 1) / WINDOW4 * WINDOW4;
-            let Some((t, a)) = window(gpu, x, start, WINDOW4.min(first + len - start))? else { return Ok(None) };
-            *at_k = a;
-            windows.push(t);
-        }
+        let Some((at, windows)) = consecutive_windows(gpu, x, first, len)? else { return Ok(None) };
         plan.push((StageWin { at, first: first as u32, len: len as u32, w4n: (iw / 4) as u32, ih: ih as u32 }, windows));
     }
     Ok(Some(plan))
@@ -191,12 +185,20 @@ fn weight_windows(gpu: &Gpu, w: &Tensor) -> Result<Option<([u32; 4], Vec<Tensor>
     if !windows_pay(gpu, 4) || total4 == 0 || total4 > 4 * WINDOW4 || !w.numel().is_multiple_of(4) {
         return Ok(None);
     }
-    let (mut wat, mut windows) = ([0; 4], Vec::with_capacity(4));
-    for (k, at) in wat.iter_mut().enumerate() {
-        let start = (k * WINDOW4).min(total4 - 1) / WINDOW4 * WINDOW4;
-        let Some((t, a)) = window(gpu, w, start, WINDOW4.min(total4 - start))? else { return Ok(None) };
-        *at = a;
-        windows.push(t);
+    consecutive_windows(gpu, w, 0, total4)
+}
+
+/// The four consecutive windows a dispatch reads over `t`'s vec4s `[first, first + len)` (`len`
+/// at least 1 and at most four windows): window k holds vec4s from `first + 4096 k` on, a window
+/// past the range binding the last one again. Each one's index of its first vec4 in its binding,
+/// and the views; `None` where one cannot be placed.
+fn consecutive_windows(gpu: &Gpu, t: &Tensor, first: usize, len: usize) -> Result<Option<([u32; 4], Vec<Tensor>)>> {
+    let (mut at, mut windows) = ([0; 4], Vec::with_capacity(4));
+    for (k, at_k) in at.iter_mut().enumerate() {
+        let start = first + (k * WINDOW4).min(len - 1) / WINDOW4 * WINDOW4;
+        let Some((view, a)) = window(gpu, t, start, WINDOW4.min(first + len - start))? else { return Ok(None) };
+        *at_k = a;
+        windows.push(view);
     }
-    Ok(Some((wat, windows)))
+    Ok(Some((at, windows)))
 }
