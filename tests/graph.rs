@@ -343,3 +343,114 @@ fn a_training_step_updates_every_parameter_at_once_by_adams_first_step() {
         assert_close(&format!("gradient {k}"), &grad64(&ex, v), &grads[k], 1e-6, 1e-5);
     }
 }
+
+// Weights packed once (gpu/constant.rs): x [1, 1, 9, 10, 11] -> conv3d 1->8 5^3 stride 2
+// (the first layer's direct kernels) -> conv3d 8->6 3^3 -> mse against a target. With
+// `weight_input`, the second conv's weights are a graph input instead of a parameter.
+struct ConvNet {
+    graph: Graph,
+    x: Value,
+    w1: Value,
+    w2: Value,
+    y: Value,
+    loss: Value,
+}
+
+fn conv_net(weight_input: bool) -> ConvNet {
+    use rendernet::ops::conv::{Conv, Padding};
+    let mut g = Graph::new();
+    let x = g.input("x", &[1, 1, 9, 10, 11]).unwrap();
+    let target = g.input("target", &[1, 6, 5, 5, 6]).unwrap();
+    let w1 = g.param("c1.weight", &[8, 1, 5, 5, 5], Init::Xavier).unwrap();
+    let b1 = g.param("c1.bias", &[8], Init::Constant(0.01)).unwrap();
+    let w2 = if weight_input { g.input("c2.weight", &[6, 8, 3, 3, 3]) } else { g.param("c2.weight", &[6, 8, 3, 3, 3], Init::Xavier) }.unwrap();
+    let b2 = g.param("c2.bias", &[6], Init::Constant(0.01)).unwrap();
+    let h = g.apply("c1", Op::Conv(Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same)), &[x, w1, b1]).unwrap();
+    let y = g.apply("c2", Op::Conv(Conv::conv3d([3, 3, 3], [1, 1, 1], Padding::Same)), &[h, w2, b2]).unwrap();
+    let loss = g.apply("loss", Op::Loss(Loss::Mse), &[y, target]).unwrap();
+    ConvNet { graph: g, x, w1, w2, y, loss }
+}
+
+/// An executor of `n` with a random input, keeping y and asking for x's gradient.
+fn conv_executor(n: &ConvNet, seed: u64) -> Executor {
+    let mut ex = Executor::new(gpu(), n.graph.clone(), seed).unwrap();
+    ex.feed(gpu(), n.x, &f32v(&Rng(seed).vec(9 * 10 * 11, -1.0, 1.0))).unwrap();
+    ex.keep(n.y);
+    ex.want_grad(n.x);
+    ex
+}
+
+/// A fresh executor of `n` holding `ex`'s parameters and input: what `ex` must compute.
+fn fresh_copy(n: &ConvNet, ex: &Executor) -> Executor {
+    let fresh = conv_executor(n, 99);
+    for v in n.graph.params().into_iter().chain([n.x]) {
+        fresh.feed(gpu(), v, &ex.read(gpu(), v).unwrap()).unwrap();
+    }
+    fresh
+}
+
+#[test]
+fn frozen_weights_are_packed_once_and_again_after_every_change() {
+    let n = conv_net(false);
+    let mut ex = conv_executor(&n, 5);
+    let first = ex.forward(gpu()).unwrap();
+    let y = ex.read(gpu(), n.y).unwrap();
+    // The second run skips the two convs' weight packings (one dispatch each); from the
+    // third on, nothing is created (the second's bind groups moved up by two dispatches).
+    let again = ex.forward(gpu()).unwrap();
+    assert_eq!(again.dispatches + 2, first.dispatches, "first {first:?}, again {again:?}");
+    assert_eq!(ex.read(gpu(), n.y).unwrap(), y);
+    let third = ex.forward(gpu()).unwrap();
+    assert_eq!((third.dispatches, third.created), (again.dispatches, 0), "{third:?}");
+    assert_eq!(ex.read(gpu(), n.y).unwrap(), y);
+    // New values in one parameter: both packed again, and the output is the new weights'.
+    let w2: Vec<f32> = ex.read(gpu(), n.w2).unwrap().iter().map(|v| -0.5 * v).collect();
+    ex.feed(gpu(), n.w2, &w2).unwrap();
+    assert_eq!(ex.forward(gpu()).unwrap().dispatches, first.dispatches);
+    let y2 = ex.read(gpu(), n.y).unwrap();
+    assert_ne!(y2, y);
+    let mut fresh = fresh_copy(&n, &ex);
+    fresh.forward(gpu()).unwrap();
+    assert_eq!(y2, fresh.read(gpu(), n.y).unwrap(), "after feeding a parameter");
+    // A training step changes every parameter: the next forward is the trained network's.
+    ex.forward(gpu()).unwrap();
+    ex.train_step(gpu(), n.loss, &Adam::new(0.05)).unwrap();
+    assert_ne!(ex.read(gpu(), n.w1).unwrap(), fresh.read(gpu(), n.w1).unwrap(), "the step moved c1");
+    ex.forward(gpu()).unwrap();
+    let mut fresh = fresh_copy(&n, &ex);
+    fresh.forward(gpu()).unwrap();
+    assert_eq!(ex.read(gpu(), n.y).unwrap(), fresh.read(gpu(), n.y).unwrap(), "after a training step");
+}
+
+#[test]
+fn a_frozen_backward_reuses_its_packings_and_weights_that_are_inputs_never_do() {
+    // Inverse rendering's runs: backward through frozen parameters to an input, repeated.
+    let n = conv_net(false);
+    let mut ex = conv_executor(&n, 6);
+    ex.freeze_params();
+    let first = ex.backward(gpu(), n.loss).unwrap();
+    let dx = ex.grad(gpu(), n.x).unwrap();
+    let again = ex.backward(gpu(), n.loss).unwrap();
+    assert!(again.dispatches + 2 < first.dispatches, "forward and backward-input packings kept: first {first:?}, again {again:?}");
+    assert_eq!(ex.grad(gpu(), n.x).unwrap(), dx);
+    let mut plain = fresh_copy(&n, &ex);
+    plain.reuse_gpu_objects(false);
+    plain.freeze_params();
+    plain.backward(gpu(), n.loss).unwrap();
+    assert_eq!(plain.grad(gpu(), n.x).unwrap(), dx, "against a run that keeps nothing");
+    // Weights fed as an input may change without a parameter write: packed every run.
+    let n = conv_net(true);
+    let mut ex = conv_executor(&n, 7);
+    ex.feed(gpu(), n.w2, &f32v(&Rng(8).vec(6 * 8 * 27, -0.3, 0.3))).unwrap();
+    let first = ex.forward(gpu()).unwrap();
+    ex.feed(gpu(), n.w2, &f32v(&Rng(9).vec(6 * 8 * 27, -0.3, 0.3))).unwrap();
+    let again = ex.forward(gpu()).unwrap();
+    assert_eq!(again.dispatches + 1, first.dispatches, "only the parameter c1 kept its packing");
+    let mut fresh = conv_executor(&n, 7);
+    fresh.feed(gpu(), n.w2, &ex.read(gpu(), n.w2).unwrap()).unwrap();
+    for v in n.graph.params() {
+        fresh.feed(gpu(), v, &ex.read(gpu(), v).unwrap()).unwrap();
+    }
+    fresh.forward(gpu()).unwrap();
+    assert_eq!(ex.read(gpu(), n.y).unwrap(), fresh.read(gpu(), n.y).unwrap(), "new input weights");
+}

@@ -16,6 +16,7 @@
 //! resources (wgpu's handles compare by identity, and the memo holds them, so an identity
 //! cannot be recycled while compared).
 
+use super::constant::{Constants, Packing};
 use super::pool::Reuse;
 use super::{BufferPool, Gpu, Tensor};
 use crate::error::{Error, Result};
@@ -76,12 +77,26 @@ pub struct Memo {
     textures: Reuse<TexKey, wgpu::TextureView>,
     live_textures: Vec<(TexKey, wgpu::TextureView)>,
     texture_bytes: u64,
+    /// Weights packed once, while the parameters stay unchanged (see `constant.rs`).
+    constants: Constants,
 }
 
 impl Memo {
     /// Bytes of scratch buffers, scratch textures and uniform chunks this memo holds.
     pub fn bytes(&self) -> u64 {
-        self.scratch.allocated_bytes() + self.texture_bytes + self.chunks.len() as u64 * SLOT * CHUNK_SLOTS as u64
+        self.scratch.allocated_bytes() + self.texture_bytes + self.constants.bytes() + self.chunks.len() as u64 * SLOT * CHUNK_SLOTS as u64
+    }
+
+    /// Before a run: `params` is the buffer holding the graph's parameters and the version of
+    /// its contents, whose packings this run may reuse and keep (`None`: a run that changes
+    /// them, which neither reuses nor keeps any).
+    pub fn begin_constants(&mut self, params: Option<(wgpu::Buffer, u64)>) {
+        self.constants.begin_run(params);
+    }
+
+    /// After a run: whether it was submitted, making the packings it recorded valid.
+    pub fn end_constants(&mut self, submitted: bool) {
+        self.constants.end_run(submitted);
     }
 
     /// The bind group and dynamic offset of the next dispatch, reusing the last recording's
@@ -194,20 +209,7 @@ impl Gpu {
     /// writes as storage and then samples; pooled like [`Gpu::scratch`].
     pub(crate) fn scratch_texture(&self, size: [usize; 3], dim: wgpu::TextureDimension) -> wgpu::TextureView {
         let key = (size, dim);
-        let make = || {
-            note_created();
-            let tex = self.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("scratch texture"),
-                size: wgpu::Extent3d { width: size[0] as u32, height: size[1] as u32, depth_or_array_layers: size[2] as u32 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: dim,
-                format: wgpu::TextureFormat::Rgba32Float,
-                usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            });
-            tex.create_view(&Default::default())
-        };
+        let make = || self.new_rgba32f_texture(size, dim);
         ACTIVE.with(|a| match a.borrow_mut().as_mut() {
             Some(m) => {
                 let view = m.textures.take_or(key, || {
@@ -231,6 +233,12 @@ impl Gpu {
         args: &[super::Arg],
     ) -> Option<Result<(wgpu::BindGroup, u32)>> {
         ACTIVE.with(|a| a.borrow_mut().as_mut().map(|m| m.bind(self, entry, layout, params, args)))
+    }
+
+    /// The kept packing of weights `w` by `key` inside a recording whose parameters are
+    /// unchanged since a packing, and whether it is valid (see [`Constants::packing`]).
+    pub(crate) fn constant_packing(&self, w: &Tensor, key: &[u8], bytes: u64, make: impl FnOnce() -> Result<Packing>) -> Result<Option<(Packing, bool)>> {
+        ACTIVE.with(|a| a.borrow_mut().as_mut().map_or(Ok(None), |m| m.constants.packing(w, key, bytes, make)))
     }
 
     /// Writes the active recording's changed uniform blocks (called right before a submit).

@@ -2,6 +2,7 @@
 //! uses. Ops record into a caller's [`wgpu::ComputePass`] so a whole step shares one submit.
 
 mod calibration;
+mod constant;
 mod context;
 mod kernel;
 mod memo;
@@ -12,6 +13,7 @@ mod window;
 pub use kernel::{Arg, Shader, grid_1d, MAX_WORKGROUPS_PER_DIM, SHADER_DIR_ENV};
 pub(crate) use kernel::wgsl;
 pub use memo::Memo;
+pub(crate) use constant::Packing;
 pub(crate) use memo::op_done;
 pub use pool::BufferPool;
 pub use tensor::Tensor;

@@ -64,6 +64,9 @@ pub struct Executor {
     /// What the last forward, backward and training run created, for the next one of the
     /// same kind (each records its own sequence of dispatches).
     memos: [Memo; 3],
+    /// Bumped at every write to the parameters, so a run reuses the weight packings of an
+    /// earlier run only while they are unchanged (see `gpu/constant.rs`).
+    param_version: std::cell::Cell<u64>,
     /// Transposed-conv weights kept resize-convolutions after every Adam step, and the
     /// projector tensor (see [`Executor::keep_resize_conv`]).
     pub(super) resize_convs: Vec<Value>,
@@ -115,6 +118,7 @@ impl Executor {
             loss_one: None,
             guard: None,
             memos: Default::default(),
+            param_version: Default::default(),
             resize_convs: Vec::new(),
             projector: None,
             reuse: true,
@@ -155,8 +159,16 @@ impl Executor {
         if let Some(i) = data.iter().position(|x| !x.is_finite()) {
             return Err(Error::Invalid(format!("'{}': value {i} is {} (NaN/Inf are not accepted)", info.name, data[i])));
         }
+        if matches!(info.kind, Kind::Param(_)) {
+            self.params_changed();
+        }
         let t = self.values[v.0].as_ref().expect("inputs and params are always allocated");
         t.write(gpu, data).map_err(|e| Error::Invalid(format!("'{}': {e}", info.name)))
+    }
+
+    /// Invalidates the weight packings kept from earlier runs.
+    fn params_changed(&self) {
+        self.param_version.set(self.param_version.get() + 1);
     }
 
     /// Keeps a node's output after a run so [`Executor::read`] can return it.
@@ -323,11 +335,18 @@ impl Executor {
         let (d0, s0, c0) = (gpu.dispatch_count(), gpu.submit_count(), gpu.created_count());
         self.pool.begin_run();
         let mut memo = std::mem::take(&mut self.memos[kind]);
+        // A training step changes the parameters: it neither reuses nor keeps weight packings.
+        let params = (adam.is_none()).then(|| (self.flat.params_buffer().clone(), self.param_version.get()));
+        memo.begin_constants(params);
         let tensor_bytes = if self.reuse {
             gpu.recording(&mut memo, || self.record_and_submit(gpu, &nodes, &bw, loss, adam, &last, &last_grad))
         } else {
             self.record_and_submit(gpu, &nodes, &bw, loss, adam, &last, &last_grad)
         };
+        memo.end_constants(tensor_bytes.is_ok());
+        if adam.is_some() {
+            self.params_changed(); // by Adam
+        }
         let scratch_bytes = memo.bytes();
         self.memos[kind] = memo;
         let tensor_bytes = tensor_bytes?;

@@ -51,6 +51,11 @@ impl Flat {
         Ok((flat, views))
     }
 
+    /// The buffer every parameter is a view of.
+    pub(crate) fn params_buffer(&self) -> &wgpu::Buffer {
+        &self.params
+    }
+
     /// `v`'s view into `buffer` (`None` if `v` is not a parameter).
     fn view(&self, buffer: &Arc<wgpu::Buffer>, graph: &Graph, v: Value) -> Option<Result<Tensor>> {
         self.offsets[v.0].map(|at| Tensor::view(buffer.clone(), at, &graph.values[v.0].shape))

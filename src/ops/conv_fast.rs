@@ -6,7 +6,7 @@
 use super::conv::{Geometry, Params};
 use crate::error::Result;
 use super::conv_window;
-use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
+use crate::gpu::{Arg, Gpu, Packing, Shader, Tensor, grid_1d, wgsl};
 
 const SHADER: Shader = wgsl!("conv_fast");
 /// The texture family: `conv_tex.wgsl` uses `conv_fast.wgsl`'s parameters and helpers, and
@@ -110,12 +110,10 @@ fn folded_params(g: &Geometry, f: &Folded, cpad: usize) -> Params {
 }
 
 /// Weights repacked as [tap][cpad][co16 * 16] for the packing parameters `p` (those of the
-/// dispatch geometry, with `flip` and `fold` or a phase's sub-kernel set: see the shader).
-fn pack_weights(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: &Tensor) -> Result<Tensor> {
-    let taps = (p.kd * p.kh * p.kw) as usize;
-    let out = gpu.scratch(&[taps, p.cpad as usize, p.co16 as usize * 16])?;
-    dispatch(gpu, pass, "conv_fast_pack_weights", p, &[Arg::R(w), Arg::W(&out)], out.numel())?;
-    Ok(out)
+/// dispatch geometry, with `flip` and `fold` or a phase's sub-kernel set: see the shader),
+/// into `out`.
+fn pack_weights(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: &Tensor, out: &Tensor) -> Result<()> {
+    dispatch(gpu, pass, "conv_fast_pack_weights", p, &[Arg::R(w), Arg::W(out)], out.numel())
 }
 
 fn volume(s: [usize; 3]) -> usize {
@@ -265,18 +263,36 @@ fn stage_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor
 }
 
 /// Weights packed for the packing parameters `p` (see `pack_weights`), as a texture or buffer.
+/// A parameter's packing is kept from the last run of its graph while the parameters are
+/// unchanged, and then not recorded again (`gpu/constant.rs`).
 fn pack_w(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: &Tensor, tex: bool) -> Result<Packed> {
-    if !tex {
-        return Ok(Packed::Buffer(pack_weights(gpu, pass, p, w)?));
+    let taps = (p.kd * p.kh * p.kw) as usize;
+    let (width, height) = (p.co16 as usize * 16, taps * p.cpad as usize / 4);
+    let size = [width, height, 1];
+    let dim = wgpu::TextureDimension::D2;
+    let mut key = bytemuck::bytes_of(&p).to_vec();
+    key.push(tex as u8);
+    let kept = gpu.constant_packing(w, &key, (width * height * 16) as u64, || {
+        Ok(if tex { Packing::Texture(gpu.new_rgba32f_texture(size, dim)) } else { Packing::Buffer(Tensor::zeros(gpu, &[taps, p.cpad as usize, width])?) })
+    })?;
+    let (out, valid) = match kept {
+        Some((Packing::Texture(v), valid)) => (Packed::Texture(v, wgpu::TextureViewDimension::D2), valid),
+        Some((Packing::Buffer(t), valid)) => (Packed::Buffer(t), valid),
+        None if tex => (Packed::Texture(texture(gpu, size, dim).0, wgpu::TextureViewDimension::D2), false),
+        None => (Packed::Buffer(gpu.scratch(&[taps, p.cpad as usize, width])?), false),
+    };
+    if valid {
+        return Ok(out);
     }
-    let width = p.co16 as usize * 16;
-    let height = (p.kd * p.kh * p.kw) as usize * p.cpad as usize / 4;
-    let (view, dim) = texture(gpu, [width, height, 1], wgpu::TextureDimension::D2);
-    if conv_window::pack_w(gpu, pass, p, w, &view, dim, width * height)? {
-        return Ok(Packed::Texture(view, dim));
+    match &out {
+        Packed::Buffer(t) => pack_weights(gpu, pass, p, w, t)?,
+        Packed::Texture(view, d) => {
+            if !conv_window::pack_w(gpu, pass, p, w, view, *d, width * height)? {
+                dispatch(gpu, pass, "conv_fast_pack_weights_tex", p, &[Arg::R(w), Arg::StorageTexture(view, *d)], width * height)?;
+            }
+        }
     }
-    dispatch(gpu, pass, "conv_fast_pack_weights_tex", p, &[Arg::R(w), Arg::StorageTexture(&view, dim)], width * height)?;
-    Ok(Packed::Texture(view, dim))
+    Ok(out)
 }
 
 /// The tiled forward with parameters `p` (of the dispatch geometry, output layout included)

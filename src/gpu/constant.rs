@@ -1,0 +1,110 @@
+//! Weights packed once. The tiled conv kernels read their weights repacked (an rgba32f
+//! texture or a channels-last buffer, `ops::conv_fast`), and every run of a graph used to
+//! repack them: a dispatch per conv and pass, with its loads. While the parameters do not
+//! change (rendering, inverse rendering through a frozen network, benchmarks) the last run's
+//! packing is still valid, so the executor tells its recording which buffer holds the
+//! parameters and a version it bumps at every write to them (`Executor::feed`, a training
+//! step), and a packing of a tensor in that buffer made at that version is reused with no
+//! dispatch. Other tensors never qualify: a computed value or an input may hold other
+//! contents at the same place next run.
+
+use super::{Gpu, Tensor};
+use crate::error::Result;
+use std::collections::HashMap;
+
+/// Where a packing lives: a texture the kernels read as a storage texture, or a buffer.
+#[derive(Clone)]
+pub(crate) enum Packing {
+    Texture(wgpu::TextureView),
+    Buffer(Tensor),
+}
+
+struct Entry {
+    packing: Packing,
+    /// The parameter version its contents were packed from; `None` until a run that packed
+    /// them has been submitted.
+    version: Option<u64>,
+}
+
+/// The packings one graph's runs keep for the next (held by its [`super::Memo`]).
+#[derive(Default)]
+pub(crate) struct Constants {
+    /// The buffer of the graph's parameters and the version of its contents, for this run;
+    /// `None`: nothing is reused (a training step, which changes them, or a one-off call).
+    params: Option<(wgpu::Buffer, u64)>,
+    entries: HashMap<Vec<u8>, Entry>,
+    /// Keys packed by the run being recorded.
+    pending: Vec<Vec<u8>>,
+    bytes: u64,
+}
+
+impl Constants {
+    /// Sets what the next run may reuse (see [`Constants::params`]).
+    pub(crate) fn begin_run(&mut self, params: Option<(wgpu::Buffer, u64)>) {
+        self.params = params;
+        self.pending.clear();
+    }
+
+    /// Marks the packings recorded by this run valid for its version when the run was
+    /// submitted (`ok`); otherwise they hold nothing reliable and are packed again.
+    pub(crate) fn end_run(&mut self, ok: bool) {
+        let version = self.params.take().map(|p| p.1).filter(|_| ok);
+        for k in self.pending.drain(..) {
+            if let Some(e) = self.entries.get_mut(&k) {
+                e.version = version;
+            }
+        }
+    }
+
+    /// Bytes of the packings kept.
+    pub(crate) fn bytes(&self) -> u64 {
+        self.bytes
+    }
+
+    /// The packing of `w` by `key` (whatever else decides its layout), and whether it already
+    /// holds `w`'s current values (the caller then records nothing); made by `make` (a
+    /// dedicated object of `bytes` bytes) the first time. `None` where `w` is not a parameter
+    /// of the run or the run reuses nothing.
+    pub(crate) fn packing(&mut self, w: &Tensor, key: &[u8], bytes: u64, make: impl FnOnce() -> Result<Packing>) -> Result<Option<(Packing, bool)>> {
+        let Some((buffer, version)) = self.params.as_ref() else { return Ok(None) };
+        if w.buffer() != buffer {
+            return Ok(None);
+        }
+        let mut k = Vec::with_capacity(key.len() + 8 + 8 * w.shape().len());
+        k.extend_from_slice(&w.offset().to_le_bytes());
+        for &d in w.shape() {
+            k.extend_from_slice(&(d as u64).to_le_bytes());
+        }
+        k.extend_from_slice(key);
+        if !self.entries.contains_key(&k) {
+            self.entries.insert(k.clone(), Entry { packing: make()?, version: None });
+            self.bytes += bytes;
+        }
+        let e = &self.entries[&k];
+        let valid = e.version == Some(*version);
+        let packing = e.packing.clone();
+        if !valid {
+            self.pending.push(k);
+        }
+        Ok(Some((packing, valid)))
+    }
+}
+
+impl Gpu {
+    /// An rgba32f texture the kernels write as storage and read back, counted in
+    /// [`Gpu::created_count`].
+    pub(crate) fn new_rgba32f_texture(&self, size: [usize; 3], dim: wgpu::TextureDimension) -> wgpu::TextureView {
+        super::memo::note_created();
+        let tex = self.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("rgba32f texture"),
+            size: wgpu::Extent3d { width: size[0] as u32, height: size[1] as u32, depth_or_array_layers: size[2] as u32 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: dim,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        tex.create_view(&Default::default())
+    }
+}
