@@ -2,7 +2,10 @@
 // x [N, Cp, S] occupies channels c0 .. c0 + Cp of y [N, Cy, S] (S = the product of the
 // spatial axes, 1 for vectors [N, C]). Forward places a part into the whole; backward
 // takes a part's gradient out of dy (concatenation is a permutation of copies, so its
-// backward is the same copy the other way round).
+// backward is the same copy the other way round). Concatenation along axis 0 (sibling
+// layers' weights [O, ...] into one) is the case N = 1. Narrowing (a channel range of a
+// tensor) is concat's backward copy; its own backward, `narrow_backward`, writes the whole
+// gradient: the part's gradient on its channels, zero elsewhere.
 
 struct Params { n: u32, cp: u32, cy: u32, s: u32, c0: u32 }
 @group(0) @binding(0) var<uniform> p: Params;
@@ -29,4 +32,15 @@ fn concat_backward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
     let i = gid.x + gid.y * nwg.x * 64u;
     if (i >= p.n * p.cp * p.s) { return; }
     dst[i] = src[whole(i)];
+}
+
+@compute @workgroup_size(64)
+fn narrow_backward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    if (i >= p.n * p.cy * p.s) { return; }
+    let c = (i / p.s) % p.cy;
+    let inside = c >= p.c0 && c < p.c0 + p.cp;
+    // Outside the range, j is a valid index whose value select drops.
+    let j = ((i / (p.s * p.cy)) * p.cp + select(0u, c - p.c0, inside)) * p.s + i % p.s;
+    dst[i] = select(0.0, src[j], inside);
 }

@@ -9,3 +9,8 @@ pub fn concat(a: &[f64], b: &[f64], n: usize, c1: usize, c2: usize, s: usize) ->
     }
     y
 }
+
+/// Channels `start .. start + len` of x [N, C, S].
+pub fn narrow(x: &[f64], n: usize, c: usize, s: usize, start: usize, len: usize) -> Vec<f64> {
+    (0..n).flat_map(|ni| x[(ni * c + start) * s..(ni * c + start + len) * s].iter().copied()).collect()
+}

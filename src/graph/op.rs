@@ -15,6 +15,8 @@
 //! | `Phong` | normal[N,3,H,W], albedo[N,C,H,W], mask[N,1,H,W], light[N,6] | all four |
 //! | `Loss` | prediction, target (no gradient) | both |
 //! | `Concat` | a[N,C1,S..], b[N,C2,S..] | nothing |
+//! | `ConcatAxis0(sizes)` | one or more [Ok,R..] | nothing |
+//! | `Narrow(start, len)` | x[N,C,S..] | nothing |
 //! | `Reshape(shape)` | x (same size as `shape`) | nothing |
 //! | `Mul` | x[N,C,S..], m[N,1|C,S..] | both |
 //! | `Composite` | x[N,C,D,H,W] (channel 0 occupancy) | x |
@@ -54,6 +56,13 @@ pub enum Op {
     Loss(Loss),
     /// Concatenation of two values along axis 1 (channels).
     Concat,
+    /// Concatenation of one or more values along axis 0, of the given sizes along it (inputs
+    /// are not kept for backward, which needs them): sibling layers' weights `[O, ...]` and
+    /// biases `[O]`, so one conv computes all their outputs (the Phong heads).
+    ConcatAxis0(Vec<usize>),
+    /// Channels `start .. start + len` of `[N, C, ...]` (one layer's share of a conv that
+    /// computes several).
+    Narrow(usize, usize),
     /// The same values in another shape of the same size (row-major order kept): from a
     /// conv's `[N, C, D, H, W]` to a fully-connected layer's `[N, K, 1, 1]` and back.
     Reshape(Vec<usize>),
@@ -94,6 +103,8 @@ impl Op {
             Op::Loss(Loss::Mse) => "mse",
             Op::Loss(Loss::Bce) => "bce",
             Op::Concat => "concat",
+            Op::ConcatAxis0(_) => "concat_axis0",
+            Op::Narrow(..) => "narrow",
             Op::Reshape(_) => "reshape",
             Op::Mul => "mul",
             Op::Composite => "composite",
@@ -101,9 +112,11 @@ impl Op {
         }
     }
 
+    /// How many inputs it takes (`usize::MAX`: one or more).
     fn arity(&self) -> usize {
         match self {
-            Op::Sigmoid | Op::Elu(_) | Op::Dropout(_) | Op::Reshape(_) | Op::Composite | Op::Expand(_) => 1,
+            Op::ConcatAxis0(_) => usize::MAX,
+            Op::Sigmoid | Op::Elu(_) | Op::Dropout(_) | Op::Reshape(_) | Op::Composite | Op::Expand(_) | Op::Narrow(..) => 1,
             Op::Prelu | Op::Add | Op::Loss(_) | Op::Resample(_) | Op::Concat | Op::Mul => 2,
             Op::Projection | Op::Conv(_) | Op::ConvTranspose(_) => 3,
             Op::Phong(_) => 4,
@@ -112,8 +125,11 @@ impl Op {
 
     /// The output shape for these input shapes, or why they do not fit.
     pub(crate) fn infer(&self, s: &[&[usize]]) -> Result<Vec<usize>> {
-        if s.len() != self.arity() {
-            return Err(shape_err(self.name(), format!("takes {} inputs, got {}", self.arity(), s.len())));
+        match self.arity() {
+            usize::MAX if s.is_empty() => return Err(shape_err(self.name(), "takes one or more inputs, got none")),
+            usize::MAX => {}
+            a if s.len() != a => return Err(shape_err(self.name(), format!("takes {a} inputs, got {}", s.len()))),
+            _ => {}
         }
         match self {
             Op::Sigmoid | Op::Elu(_) | Op::Dropout(_) => Ok(s[0].to_vec()),
@@ -160,6 +176,13 @@ impl Op {
                 Ok(vec![1])
             }
             Op::Concat => ops::concat::output_shape(s),
+            Op::ConcatAxis0(sizes) => {
+                if s.iter().map(|p| p.first().copied().unwrap_or(0)).ne(sizes.iter().copied()) {
+                    return Err(shape_err("concat_axis0", format!("parts of {sizes:?} along axis 0 expected")));
+                }
+                ops::concat::output_shape_axis0(s)
+            }
+            Op::Narrow(start, len) => ops::concat::narrow_shape(s[0], *start, *len),
             Op::Mul => ops::mul::output_shape(s[0], s[1]),
             Op::Composite => ops::composite::output_shape(s[0]),
             Op::Expand(to) => ops::expand::output_shape(s[0], to),
@@ -196,7 +219,7 @@ impl Op {
             Op::Sigmoid => (&[], true),
             Op::Elu(_) | Op::Composite => (&[0], false),
             Op::Prelu => (&[0, 1], false),
-            Op::Dropout(_) | Op::Add | Op::Concat | Op::Reshape(_) | Op::Expand(_) => (&[], false),
+            Op::Dropout(_) | Op::Add | Op::Concat | Op::ConcatAxis0(_) | Op::Narrow(..) | Op::Reshape(_) | Op::Expand(_) => (&[], false),
             Op::Projection => (&[0, 1], false),
             Op::Resample(_) | Op::Conv(_) | Op::ConvTranspose(_) => (&[0, 1], false),
             Op::Phong(_) => (&[0, 1, 2, 3], false),
@@ -227,6 +250,8 @@ impl Op {
             Op::Phong(ph) => ph.forward(g, p, &phong_inputs(x), y),
             Op::Loss(l) => l.forward(g, p, x[0], x[1], y),
             Op::Concat => ops::concat::forward(g, p, x, y),
+            Op::ConcatAxis0(_) => ops::concat::forward_axis0(g, p, x, y),
+            Op::Narrow(start, _) => ops::concat::narrow(g, p, x[0], *start, y),
             Op::Reshape(_) => ops::add::reshape(g, p, x[0], y),
             Op::Mul => ops::mul::forward(g, p, x[0], x[1], y),
             Op::Composite => ops::composite::forward(g, p, x[0], y),
@@ -297,6 +322,13 @@ impl Op {
                 }
                 ops::concat::backward(g, p, dy, &[&shapes[0], &shapes[1]], dx)
             }
+            Op::ConcatAxis0(sizes) => {
+                // Inputs are not saved (`x` may hold stand-ins): the op carries the parts' sizes.
+                let shapes: Vec<Vec<usize>> = sizes.iter().map(|&o| [&[o][..], &dy.shape()[1..]].concat()).collect();
+                let refs: Vec<&[usize]> = shapes.iter().map(Vec::as_slice).collect();
+                ops::concat::backward_axis0(g, p, dy, &refs, dx)
+            }
+            Op::Narrow(start, _) => some(dx[0], |d| ops::concat::narrow_backward(g, p, dy, *start, d)),
             Op::Reshape(_) => some(dx[0], |d| ops::add::reshape(g, p, dy, d)),
             Op::Mul => {
                 some(dx[0], |d| ops::mul::backward_x(g, p, dy, x[1], d))?;

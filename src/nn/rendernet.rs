@@ -238,13 +238,49 @@ impl Builder<'_> {
     }
 
     pub(crate) fn conv(&mut self, name: &str, x: Value, cout: usize, conv: Conv) -> Result<Value> {
+        let (w, b) = self.conv_params(name, x, cout, &conv)?;
+        self.g.apply(name, Op::Conv(conv), &[x, w, b])
+    }
+
+    /// The weight (Xavier) and bias of conv `name` from `x` to `cout` channels.
+    fn conv_params(&mut self, name: &str, x: Value, cout: usize, conv: &Conv) -> Result<(Value, Value)> {
         let cin = self.g.info(x).shape[1];
         let mut wshape = vec![cout, cin];
         let rank = self.g.info(x).shape.len();
         wshape.extend(&conv.kernel[5 - rank..]);
         let w = self.param(&format!("{name}.weight"), &wshape, Init::Xavier)?;
         let b = self.param(&format!("{name}.bias"), &[cout], Init::Constant(0.001))?;
-        self.g.apply(name, Op::Conv(conv), &[x, w, b])
+        Ok((w, b))
+    }
+
+    /// The Phong heads (normal 3, albedo `ca`, mask 1 channels, 3x3 convs from `x`) as one conv
+    /// over their concatenated weights: `x` is read and packed once and each tile computes
+    /// all their channels (on lavapipe about half the time of three convs, README
+    /// "Benchmarks"). Parameters and node names stay the three heads' (`head.normal` ...: each
+    /// head's logits, narrowed out of the joint output). `seen` is added to the albedo's
+    /// logits (coloured models). Returns the normal, albedo and mask maps.
+    fn phong_heads(&mut self, x: Value, ca: usize, seen: impl FnOnce(&mut Self) -> Result<Option<Value>>) -> Result<[Value; 3]> {
+        let conv = Conv::conv2d([3, 3], [1, 1], Padding::Same);
+        let (wn, bn) = self.conv_params("head.normal", x, 3, &conv)?;
+        // Built between the heads' parameters so parameters keep their order, hence their
+        // seeded initial values.
+        let seen = seen(self)?;
+        let (wa, ba) = self.conv_params("head.albedo", x, ca, &conv)?;
+        let (wm, bm) = self.conv_params("head.mask", x, 1, &conv)?;
+        let sizes = vec![3, ca, 1];
+        let w = self.g.apply("head.weight", Op::ConcatAxis0(sizes.clone()), &[wn, wa, wm])?;
+        let b = self.g.apply("head.bias", Op::ConcatAxis0(sizes), &[bn, ba, bm])?;
+        let h = self.g.apply("head", Op::Conv(conv), &[x, w, b])?;
+        let normal = self.g.apply("head.normal", Op::Narrow(0, 3), &[h])?;
+        let normal = self.g.apply("head.normal.sigmoid", Op::Sigmoid, &[normal])?;
+        let mut albedo = self.g.apply("head.albedo", Op::Narrow(3, ca), &[h])?;
+        if let Some(seen) = seen {
+            albedo = self.g.apply("head.albedo.seen", Op::Add, &[albedo, seen])?;
+        }
+        let albedo = self.g.apply("head.albedo.sigmoid", Op::Sigmoid, &[albedo])?;
+        let mask = self.g.apply("head.mask", Op::Narrow(3 + ca, 1), &[h])?;
+        let mask = self.g.apply("head.mask.sigmoid", Op::Sigmoid, &[mask])?;
+        Ok([normal, albedo, mask])
     }
 
     /// A transposed conv `t` with PyTorch's `[Cin, Cout, k...]` weights (Xavier).
@@ -393,17 +429,11 @@ impl RenderNet {
         let (hh, ww) = (s[2], s[3]);
         let (image, maps, light) = match head {
             Head::Phong(ph) => {
-                let normal = b.head("head.normal", x, 3)?;
                 // Coloured: the visible colour, composited along the camera grid's depth, is
-                // added to the albedo head's logits at the image's size. (Built before the head
-                // so parameters keep their order, hence their seeded initial values.)
-                let seen = if p.colour { Some(b.colour_seen(camera_grid, p.up.len())?) } else { None };
-                let mut h = b.conv("head.albedo", x, p.albedo_channels(), Conv::conv2d([3, 3], [1, 1], Padding::Same))?;
-                if let Some(seen) = seen {
-                    h = b.g.apply("head.albedo.seen", Op::Add, &[h, seen])?;
-                }
-                let albedo = b.g.apply("head.albedo.sigmoid", Op::Sigmoid, &[h])?;
-                let mask = b.head("head.mask", x, 1)?;
+                // added to the albedo head's logits at the image's size.
+                let ups = p.up.len();
+                let seen = |b: &mut Builder| if p.colour { b.colour_seen(camera_grid, ups).map(Some) } else { Ok(None) };
+                let [normal, albedo, mask] = b.phong_heads(x, p.albedo_channels(), seen)?;
                 let light = b.g.input("light", &[n, 6])?;
                 let img = b.g.apply("phong", Op::Phong(ph), &[normal, albedo, mask, light])?;
                 (img, Some([normal, albedo, mask]), Some(light))

@@ -1,7 +1,11 @@
 //! Concatenation along the channel axis (binds `shaders/concat.wgsl`): `[N, C1, S...]` and
 //! `[N, C2, S...]` into `[N, C1 + C2, S...]`, e.g. a shape code with pose and light vectors
 //! (the EC baselines, the shape prior). Backward splits `dy` into the parts' gradients.
+//! Also concatenation along axis 0 (sibling layers' weights and biases, so one conv computes
+//! them all) and its inverse on channels, narrowing (`[N, C, S...]` to channels `start ..
+//! start + len`).
 
+use super::expect_shape;
 use crate::error::{Result, shape_err};
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
@@ -41,14 +45,22 @@ fn per_part(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, forward: bool, whole: &
     if whole.shape() != want {
         return Err(shape_err("concat", format!("the whole has shape {:?}, expected {want:?}", whole.shape())));
     }
+    // [N, Cp, S] parts of a [N, Cy, S] whole.
+    let layout: Vec<(u32, u32, u32)> = shapes.iter().map(|s| (s[0] as u32, s[1] as u32, s[2..].iter().product::<usize>() as u32)).collect();
+    copy_parts(gpu, pass, forward, whole, want[1] as u32, shapes, &layout, parts)
+}
+
+/// `per_part` on explicit layouts: part k is `[n, cp, s]` (`layout[k]`) of a whole with
+/// `cy` channels; `shapes` are the parts' own shapes, checked against the tensors.
+#[allow(clippy::too_many_arguments)]
+fn copy_parts(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, forward: bool, whole: &Tensor, cy: u32, shapes: &[&[usize]], layout: &[(u32, u32, u32)], parts: &[Option<&Tensor>]) -> Result<()> {
     let mut c0 = 0;
-    for (shape, part) in shapes.iter().zip(parts) {
+    for ((shape, &(n, cp, s)), part) in shapes.iter().zip(layout).zip(parts) {
         if let Some(t) = part {
             if t.shape() != *shape {
                 return Err(shape_err("concat", format!("part {:?} where {shape:?} was expected", t.shape())));
             }
-            let s: usize = shape[2..].iter().product();
-            let p = Params { n: shape[0] as u32, cp: shape[1] as u32, cy: want[1] as u32, s: s as u32, c0: c0 as u32 };
+            let p = Params { n, cp, cy, s, c0 };
             let (entry, args) = if forward {
                 ("concat_forward", [Arg::R(t), Arg::W(whole)])
             } else {
@@ -56,9 +68,81 @@ fn per_part(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, forward: bool, whole: &
             };
             gpu.dispatch(pass, SHADER, entry, &p, &args, grid_1d(t.numel() as u64, 64)?)?;
         }
-        c0 += shape[1];
+        c0 += cp;
     }
     Ok(())
+}
+
+/// The shape of the concatenation of `parts` along axis 0 (same rank >= 1, same sizes on
+/// the other axes), or why they do not fit.
+pub fn output_shape_axis0(parts: &[&[usize]]) -> Result<Vec<usize>> {
+    let first = parts.first().ok_or_else(|| shape_err("concat_axis0", "needs at least one input"))?;
+    let mut out = first.to_vec();
+    for p in &parts[1..] {
+        if p.len() != first.len() || p.get(1..) != first.get(1..) {
+            return Err(shape_err("concat_axis0", format!("{p:?} does not match {first:?} outside axis 0")));
+        }
+        out[0] += p[0];
+    }
+    if out.is_empty() {
+        return Err(shape_err("concat_axis0", "inputs need at least one axis"));
+    }
+    Ok(out)
+}
+
+/// Parts `[Op, rest...]` as `[1, Op, rest]` of the whole `[sum Op, rest...]`.
+fn rows(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, forward: bool, whole: &Tensor, shapes: &[&[usize]], parts: &[Option<&Tensor>]) -> Result<()> {
+    let want = output_shape_axis0(shapes)?;
+    if whole.shape() != want {
+        return Err(shape_err("concat_axis0", format!("the whole has shape {:?}, expected {want:?}", whole.shape())));
+    }
+    let layout: Vec<(u32, u32, u32)> = shapes.iter().map(|s| (1, s[0] as u32, s[1..].iter().product::<usize>() as u32)).collect();
+    copy_parts(gpu, pass, forward, whole, want[0] as u32, shapes, &layout, parts)
+}
+
+/// `y = [a, b, ...]` along axis 0.
+pub fn forward_axis0(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, parts: &[&Tensor], y: &Tensor) -> Result<()> {
+    let shapes: Vec<&[usize]> = parts.iter().map(|t| t.shape()).collect();
+    let parts: Vec<Option<&Tensor>> = parts.iter().map(|&t| Some(t)).collect();
+    rows(gpu, pass, true, y, &shapes, &parts)
+}
+
+/// Each part's gradient from `dy` of [`forward_axis0`]; `shapes` place the parts, and a part
+/// whose slot in `dparts` is `None` gets none.
+pub fn backward_axis0(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, dy: &Tensor, shapes: &[&[usize]], dparts: &[Option<&Tensor>]) -> Result<()> {
+    rows(gpu, pass, false, dy, shapes, dparts)
+}
+
+/// The shape of channels `start .. start + len` of `x` ([N, C, ...]), or why there are none.
+pub fn narrow_shape(x: &[usize], start: usize, len: usize) -> Result<Vec<usize>> {
+    if x.len() < 2 || len == 0 || start + len > x[1] {
+        return Err(shape_err("narrow", format!("channels {start}..{} of {x:?} (needs [N, C, ...] with len >= 1 and start + len <= C)", start + len)));
+    }
+    let mut out = x.to_vec();
+    out[1] = len;
+    Ok(out)
+}
+
+fn narrow_params(x: &[usize], start: usize, len: usize) -> Result<Params> {
+    narrow_shape(x, start, len)?;
+    let s = x[2..].iter().product::<usize>() as u32;
+    Ok(Params { n: x[0] as u32, cp: len as u32, cy: x[1] as u32, s, c0: start as u32 })
+}
+
+/// `y` = channels `start ..` of `x` (as many as `y` has).
+pub fn narrow(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, start: usize, y: &Tensor) -> Result<()> {
+    let len = y.shape().get(1).copied().unwrap_or(0);
+    expect_shape("narrow", "y", y, &narrow_shape(x.shape(), start, len)?)?;
+    let p = narrow_params(x.shape(), start, len)?;
+    gpu.dispatch(pass, SHADER, "concat_backward", &p, &[Arg::R(x), Arg::W(y)], grid_1d(y.numel() as u64, 64)?)
+}
+
+/// The gradient of [`narrow`]: `dx` = `dy` on channels `start ..`, zero elsewhere.
+pub fn narrow_backward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, dy: &Tensor, start: usize, dx: &Tensor) -> Result<()> {
+    let len = dy.shape().get(1).copied().unwrap_or(0);
+    expect_shape("narrow", "dy", dy, &narrow_shape(dx.shape(), start, len)?)?;
+    let p = narrow_params(dx.shape(), start, len)?;
+    gpu.dispatch(pass, SHADER, "narrow_backward", &p, &[Arg::R(dy), Arg::W(dx)], grid_1d(dx.numel() as u64, 64)?)
 }
 
 /// `y = [a, b, ...]` along axis 1.
