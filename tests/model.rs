@@ -115,8 +115,10 @@ fn shipped_weights_render_an_unseen_shape_close_to_the_reference() {
     let truth = reference::RayMarcher::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, 128).unwrap();
     let s = Scores::of(&img, &truth);
     let black = Scores::black_floor(&truth);
-    eprintln!("object PSNR {:.2} dB (all-black {:.2}), full-frame {:.2}, SSIM {:.3}", s.object_psnr, black.object_psnr, s.psnr, s.ssim);
+    eprintln!("object PSNR {:.2} dB (all-black {:.2}), full-frame {:.2}, SSIM {:.3}, mask IoU {:.3}", s.object_psnr, black.object_psnr, s.psnr, s.ssim, s.iou);
     assert!(s.object_psnr > MIN_OBJECT_DB, "shipped weights: object PSNR {:.2} dB, expected > {MIN_OBJECT_DB} (all-black {:.2})", s.object_psnr, black.object_psnr);
+    // The silhouette is the mask head's alone (object PSNR barely sees the background).
+    assert!(s.iou > MIN_MASK_IOU, "shipped weights: mask IoU {:.3}, expected > {MIN_MASK_IOU}", s.iou);
 }
 
 /// The shipped weights (fine-tuned at a 64^3 input) measured 17.30 dB object PSNR on this
@@ -125,6 +127,8 @@ fn shipped_weights_render_an_unseen_shape_close_to_the_reference() {
 /// sits just under it (drivers differ in float rounding by far less than 0.3 dB), so a
 /// regression of the weights, a broken kernel or a mis-loaded tensor fails here.
 const MIN_OBJECT_DB: f64 = 17.0;
+/// The same render's mask IoU against the reference's silhouette (measured 0.976; set under it).
+const MIN_MASK_IOU: f64 = 0.95;
 
 /// The shipped base weights (the most accurate rung, trained on a GPU) on a procedural chair
 /// no training set drew, at the paper's closest framing (radius 3.3), against the
