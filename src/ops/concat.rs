@@ -38,29 +38,24 @@ pub fn output_shape(parts: &[&[usize]]) -> Result<Vec<usize>> {
     Ok(out)
 }
 
-/// One dispatch per present part: `entry` copies between the part and its channel range of
-/// `whole` (forward: part into whole; backward: whole into part).
-fn per_part(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, forward: bool, whole: &Tensor, shapes: &[&[usize]], parts: &[Option<&Tensor>]) -> Result<()> {
-    let want = output_shape(shapes)?;
+/// One dispatch per present part, concatenated along `axis` (0 or 1): `entry` copies between
+/// the part and its range of `whole` (forward: part into whole; backward: whole into part).
+/// Along axis 0 a part `[Op, rest...]` is the channel kernels' `[1, Op, rest]`.
+fn per_part(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, forward: bool, axis: usize, whole: &Tensor, shapes: &[&[usize]], parts: &[Option<&Tensor>]) -> Result<()> {
+    let want = if axis == 0 { output_shape_axis0(shapes)? } else { output_shape(shapes)? };
     if whole.shape() != want {
         return Err(shape_err("concat", format!("the whole has shape {:?}, expected {want:?}", whole.shape())));
     }
-    // [N, Cp, S] parts of a [N, Cy, S] whole.
-    let layout: Vec<(u32, u32, u32)> = shapes.iter().map(|s| (s[0] as u32, s[1] as u32, s[2..].iter().product::<usize>() as u32)).collect();
-    copy_parts(gpu, pass, forward, whole, want[1] as u32, shapes, &layout, parts)
-}
-
-/// `per_part` on explicit layouts: part k is `[n, cp, s]` (`layout[k]`) of a whole with
-/// `cy` channels; `shapes` are the parts' own shapes, checked against the tensors.
-#[allow(clippy::too_many_arguments)]
-fn copy_parts(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, forward: bool, whole: &Tensor, cy: u32, shapes: &[&[usize]], layout: &[(u32, u32, u32)], parts: &[Option<&Tensor>]) -> Result<()> {
     let mut c0 = 0;
-    for ((shape, &(n, cp, s)), part) in shapes.iter().zip(layout).zip(parts) {
+    for (shape, part) in shapes.iter().zip(parts) {
+        // The part as [n, cp, s] of a whole with cy along the axis.
+        let (n, cp) = if axis == 0 { (1, shape[0]) } else { (shape[0], shape[1]) };
+        let s = shape[axis + 1..].iter().product::<usize>() as u32;
         if let Some(t) = part {
             if t.shape() != *shape {
                 return Err(shape_err("concat", format!("part {:?} where {shape:?} was expected", t.shape())));
             }
-            let p = Params { n, cp, cy, s, c0 };
+            let p = Params { n: n as u32, cp: cp as u32, cy: want[axis] as u32, s, c0 };
             let (entry, args) = if forward {
                 ("concat_forward", [Arg::R(t), Arg::W(whole)])
             } else {
@@ -68,9 +63,16 @@ fn copy_parts(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, forward: bool, whole:
             };
             gpu.dispatch(pass, SHADER, entry, &p, &args, grid_1d(t.numel() as u64, 64)?)?;
         }
-        c0 += cp;
+        c0 += cp as u32;
     }
     Ok(())
+}
+
+/// `y` = `parts` concatenated along `axis`.
+fn forward_along(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, axis: usize, parts: &[&Tensor], y: &Tensor) -> Result<()> {
+    let shapes: Vec<&[usize]> = parts.iter().map(|t| t.shape()).collect();
+    let parts: Vec<Option<&Tensor>> = parts.iter().map(|&t| Some(t)).collect();
+    per_part(gpu, pass, true, axis, y, &shapes, &parts)
 }
 
 /// The shape of the concatenation of `parts` along axis 0 (same rank >= 1, same sizes on
@@ -90,27 +92,15 @@ pub fn output_shape_axis0(parts: &[&[usize]]) -> Result<Vec<usize>> {
     Ok(out)
 }
 
-/// Parts `[Op, rest...]` as `[1, Op, rest]` of the whole `[sum Op, rest...]`.
-fn rows(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, forward: bool, whole: &Tensor, shapes: &[&[usize]], parts: &[Option<&Tensor>]) -> Result<()> {
-    let want = output_shape_axis0(shapes)?;
-    if whole.shape() != want {
-        return Err(shape_err("concat_axis0", format!("the whole has shape {:?}, expected {want:?}", whole.shape())));
-    }
-    let layout: Vec<(u32, u32, u32)> = shapes.iter().map(|s| (1, s[0] as u32, s[1..].iter().product::<usize>() as u32)).collect();
-    copy_parts(gpu, pass, forward, whole, want[0] as u32, shapes, &layout, parts)
-}
-
 /// `y = [a, b, ...]` along axis 0.
 pub fn forward_axis0(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, parts: &[&Tensor], y: &Tensor) -> Result<()> {
-    let shapes: Vec<&[usize]> = parts.iter().map(|t| t.shape()).collect();
-    let parts: Vec<Option<&Tensor>> = parts.iter().map(|&t| Some(t)).collect();
-    rows(gpu, pass, true, y, &shapes, &parts)
+    forward_along(gpu, pass, 0, parts, y)
 }
 
 /// Each part's gradient from `dy` of [`forward_axis0`]; `shapes` place the parts, and a part
 /// whose slot in `dparts` is `None` gets none.
 pub fn backward_axis0(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, dy: &Tensor, shapes: &[&[usize]], dparts: &[Option<&Tensor>]) -> Result<()> {
-    rows(gpu, pass, false, dy, shapes, dparts)
+    per_part(gpu, pass, false, 0, dy, shapes, dparts)
 }
 
 /// The shape of channels `start .. start + len` of `x` ([N, C, ...]), or why there are none.
@@ -147,13 +137,11 @@ pub fn narrow_backward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, dy: &Tensor,
 
 /// `y = [a, b, ...]` along axis 1.
 pub fn forward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, parts: &[&Tensor], y: &Tensor) -> Result<()> {
-    let shapes: Vec<&[usize]> = parts.iter().map(|t| t.shape()).collect();
-    let parts: Vec<Option<&Tensor>> = parts.iter().map(|&t| Some(t)).collect();
-    per_part(gpu, pass, true, y, &shapes, &parts)
+    forward_along(gpu, pass, 1, parts, y)
 }
 
 /// Each part's gradient from `dy`. `shapes` are the parts' shapes, in order (they place the
 /// parts); a part whose slot in `dparts` is `None` gets none.
 pub fn backward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, dy: &Tensor, shapes: &[&[usize]], dparts: &[Option<&Tensor>]) -> Result<()> {
-    per_part(gpu, pass, false, dy, shapes, dparts)
+    per_part(gpu, pass, false, 1, dy, shapes, dparts)
 }
