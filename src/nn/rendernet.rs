@@ -262,8 +262,9 @@ impl Builder<'_> {
     fn phong_heads(&mut self, x: Value, ca: usize, seen: impl FnOnce(&mut Self) -> Result<Option<Value>>) -> Result<[Value; 3]> {
         let conv = Conv::conv2d([3, 3], [1, 1], Padding::Same);
         let (wn, bn) = self.conv_params("head.normal", x, 3, &conv)?;
-        // Built between the heads' parameters so parameters keep their order, hence their
-        // seeded initial values.
+        // Built between the heads' parameters so parameters keep their order (their initial
+        // values are seeded by value index, which the joint conv shifted for the albedo and
+        // mask heads: a fresh training run starts them from other draws than before it).
         let seen = seen(self)?;
         let (wa, ba) = self.conv_params("head.albedo", x, ca, &conv)?;
         let (wm, bm) = self.conv_params("head.mask", x, 1, &conv)?;
