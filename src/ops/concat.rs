@@ -79,15 +79,15 @@ fn forward_along(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, axis: usize, parts
 /// the other axes), or why they do not fit.
 pub fn output_shape_axis0(parts: &[&[usize]]) -> Result<Vec<usize>> {
     let first = parts.first().ok_or_else(|| shape_err("concat_axis0", "needs at least one input"))?;
+    if first.is_empty() {
+        return Err(shape_err("concat_axis0", "inputs need at least one axis"));
+    }
     let mut out = first.to_vec();
     for p in &parts[1..] {
-        if p.len() != first.len() || p.get(1..) != first.get(1..) {
+        if p.len() != first.len() || p[1..] != first[1..] {
             return Err(shape_err("concat_axis0", format!("{p:?} does not match {first:?} outside axis 0")));
         }
         out[0] += p[0];
-    }
-    if out.is_empty() {
-        return Err(shape_err("concat_axis0", "inputs need at least one axis"));
     }
     Ok(out)
 }
@@ -113,17 +113,18 @@ pub fn narrow_shape(x: &[usize], start: usize, len: usize) -> Result<Vec<usize>>
     Ok(out)
 }
 
-fn narrow_params(x: &[usize], start: usize, len: usize) -> Result<Params> {
-    narrow_shape(x, start, len)?;
+/// The channel kernels' parameters of channels `start .. start + len` of `x` (checked by the
+/// caller with [`narrow_shape`]).
+fn narrow_params(x: &[usize], start: usize, len: usize) -> Params {
     let s = x[2..].iter().product::<usize>() as u32;
-    Ok(Params { n: x[0] as u32, cp: len as u32, cy: x[1] as u32, s, c0: start as u32 })
+    Params { n: x[0] as u32, cp: len as u32, cy: x[1] as u32, s, c0: start as u32 }
 }
 
 /// `y` = channels `start ..` of `x` (as many as `y` has).
 pub fn narrow(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, start: usize, y: &Tensor) -> Result<()> {
     let len = y.shape().get(1).copied().unwrap_or(0);
     expect_shape("narrow", "y", y, &narrow_shape(x.shape(), start, len)?)?;
-    let p = narrow_params(x.shape(), start, len)?;
+    let p = narrow_params(x.shape(), start, len);
     gpu.dispatch(pass, SHADER, "concat_backward", &p, &[Arg::R(x), Arg::W(y)], grid_1d(y.numel() as u64, 64)?)
 }
 
@@ -131,7 +132,7 @@ pub fn narrow(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, start: us
 pub fn narrow_backward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, dy: &Tensor, start: usize, dx: &Tensor) -> Result<()> {
     let len = dy.shape().get(1).copied().unwrap_or(0);
     expect_shape("narrow", "dy", dy, &narrow_shape(dx.shape(), start, len)?)?;
-    let p = narrow_params(dx.shape(), start, len)?;
+    let p = narrow_params(dx.shape(), start, len);
     gpu.dispatch(pass, SHADER, "narrow_backward", &p, &[Arg::R(dy), Arg::W(dx)], grid_1d(dx.numel() as u64, 64)?)
 }
 
