@@ -1,12 +1,13 @@
 //! The tiled conv kernels of `shaders/conv_fast.wgsl` (see its header for the tiling and why
 //! it suits lavapipe), behind `conv::dispatch_*`, in two families chosen by [`Operands`]:
 //! storage buffers, or textures shared across a subgroup. Each call repacks its operands
-//! (channels-last buffers or rgba32f textures) first, so callers keep PyTorch layouts.
+//! (channels-last buffers or rgba32f textures, `conv_pack`) first, so callers keep PyTorch
+//! layouts.
 
 use super::conv::{Geometry, Params};
 use crate::error::Result;
-use super::conv_window;
-use crate::gpu::{Arg, Gpu, Packing, Shader, Tensor, grid_1d, wgsl};
+use super::conv_pack::{Packed, pack_folded, pack_input, pack_w, pack_x, stage_x};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
 const SHADER: Shader = wgsl!("conv_fast");
 /// The texture family: `conv_tex.wgsl` uses `conv_fast.wgsl`'s parameters and helpers, and
@@ -29,37 +30,28 @@ fn params(g: &Geometry, cpad: usize) -> Params {
     }
 }
 
-fn dispatch(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, entry: &'static str, mut p: Params, args: &[Arg], total: usize) -> Result<()> {
+pub(super) fn dispatch(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, entry: &'static str, mut p: Params, args: &[Arg], total: usize) -> Result<()> {
     p.total = total as u32;
     let shader = if entry.ends_with("_tex") { TEX_SHADER } else { SHADER };
     gpu.dispatch(pass, shader, entry, &p, args, grid_1d(total as u64, 64)?)
 }
 
-/// `t` ([N, c, sp...]) repacked channels-last as [N, sp..., cpad], channels past `c` zero.
-fn pack_input(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, t: &Tensor, n: usize, c: usize, sp: [usize; 3], cpad: usize) -> Result<Tensor> {
-    let out = gpu.scratch(&[n, volume(sp), cpad])?;
-    let [od, oh, ow] = sp.map(|v| v as u32);
-    let p = Params { n: n as u32, ci: c as u32, od, oh, ow, cpad: cpad as u32, ..Default::default() };
-    dispatch(gpu, pass, "conv_fast_pack_input", p, &[Arg::R(t), Arg::W(&out)], n * volume(sp))?;
-    Ok(out)
-}
-
 /// A conv with its innermost kernel axes folded into the input channels (see
 /// `conv_fast_pack_folded`): the geometry the kernels run, and the fold sizes along H and W.
-struct Folded {
-    g: Geometry,
-    fh: usize,
-    fw: usize,
+pub(super) struct Folded {
+    pub(super) g: Geometry,
+    pub(super) fh: usize,
+    pub(super) fw: usize,
 }
 
 impl Folded {
     /// `g` with nothing folded.
-    fn none(g: Geometry) -> Folded {
+    pub(super) fn none(g: Geometry) -> Folded {
         Folded { g, fh: 1, fw: 1 }
     }
 
     /// Taps per folded channel group.
-    fn fold(&self) -> usize {
+    pub(super) fn fold(&self) -> usize {
         self.fh * self.fw
     }
 }
@@ -85,38 +77,7 @@ fn fold(g: &Geometry, quantum: usize) -> Folded {
     Folded { g, fh, fw }
 }
 
-/// `x` ([N, C, input...] of the unfolded `g`) packed for the folded conv `f`, channels-last
-/// with `cpad` channels (see `conv_fast_pack_folded`); without a fold, a plain packing.
-fn pack_folded(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded, x: &Tensor, cpad: usize) -> Result<Tensor> {
-    if f.fold() == 1 {
-        return pack_input(gpu, pass, x, g.n, g.ci, g.input, cpad);
-    }
-    let out = gpu.scratch(&[g.n, volume(f.g.input), cpad])?;
-    let p = folded_params(g, f, cpad);
-    dispatch(gpu, pass, "conv_fast_pack_folded", p, &[Arg::R(x), Arg::W(&out)], g.n * volume(f.g.input))?;
-    Ok(out)
-}
-
-/// Parameters of the folded packings (see `conv_fast_pack_folded`).
-fn folded_params(g: &Geometry, f: &Folded, cpad: usize) -> Params {
-    let u = |v: usize| v as u32;
-    let [id, ih, iw] = g.input.map(u);
-    let [od, oh, ow] = f.g.input.map(u);
-    // Along an unfolded axis: fold size 1, stride 1, no padding (a copy).
-    let (sh, ph) = if f.fh > 1 { (u(g.stride[1]), u(g.pad[1])) } else { (1, 0) };
-    let (sw, pw) = if f.fw > 1 { (u(g.stride[2]), u(g.pad[2])) } else { (1, 0) };
-    let (kh, kw) = (u(f.fh), u(f.fw));
-    Params { n: u(g.n), ci: u(g.ci), id, ih, iw, od, oh, ow, kh, kw, sh, sw, ph, pw, cpad: u(cpad), ..Default::default() }
-}
-
-/// Weights repacked as [tap][cpad][co16 * 16] for the packing parameters `p` (those of the
-/// dispatch geometry, with `flip` and `fold` or a phase's sub-kernel set: see the shader),
-/// into `out`.
-fn pack_weights(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: &Tensor, out: &Tensor) -> Result<()> {
-    dispatch(gpu, pass, "conv_fast_pack_weights", p, &[Arg::R(w), Arg::W(out)], out.numel())
-}
-
-fn volume(s: [usize; 3]) -> usize {
+pub(super) fn volume(s: [usize; 3]) -> usize {
     s.iter().product()
 }
 
@@ -176,28 +137,6 @@ fn measure(gpu: &Gpu) -> Result<bool> {
     Ok(best[1] < best[0] && ys[0].to_vec(gpu)? == ys[1].to_vec(gpu)?)
 }
 
-/// A packed operand: a channels-last buffer or an rgba32f texture.
-enum Packed {
-    Buffer(Tensor),
-    Texture(wgpu::TextureView, wgpu::TextureViewDimension),
-}
-
-impl Packed {
-    fn arg(&self) -> Arg<'_> {
-        match self {
-            Packed::Buffer(t) => Arg::R(t),
-            Packed::Texture(v, d) => Arg::ReadStorageTexture(v, *d),
-        }
-    }
-}
-
-/// An rgba32f scratch texture the kernels write as storage and then read (sizes already
-/// checked against the device's limits by `x_texture_fits` / `w_texture_fits`).
-fn texture(gpu: &Gpu, size: [usize; 3], dim: wgpu::TextureDimension) -> (wgpu::TextureView, wgpu::TextureViewDimension) {
-    let view = if dim == wgpu::TextureDimension::D3 { wgpu::TextureViewDimension::D3 } else { wgpu::TextureViewDimension::D2 };
-    (gpu.scratch_texture(size, dim), view)
-}
-
 /// Whether `ops` asks for textures and the device can run the texture kernels.
 fn textures_wanted(gpu: &Gpu, ops: Operands) -> bool {
     ops == Operands::Textures && gpu.has_subgroups_of_8() && gpu.reads_rgba32f_storage()
@@ -224,75 +163,6 @@ fn textures_fit(gpu: &Gpu, ops: Operands, g: &Geometry, cpad: usize) -> bool {
 /// weights fit the device's textures.
 fn direct_fits(gpu: &Gpu, ops: Operands, g: &Geometry, f: &Folded) -> bool {
     f.fold() > 1 && textures_fit(gpu, ops, g, g.ci.div_ceil(4) * 4) && x_texture_fits(gpu, g.n, 4 * g.ci, g.input)
-}
-
-/// `x` packed as the texture kernels read it (see `conv_fast_pack_tex`; never folded: a fold
-/// runs the direct kernels), or as a buffer (folded by `f`).
-fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded, x: &Tensor, cpad: usize, tex: bool) -> Result<Packed> {
-    if !tex {
-        return Ok(Packed::Buffer(pack_folded(gpu, pass, g, f, x, cpad)?));
-    }
-    debug_assert_eq!(f.fold(), 1, "the texture packing does not fold");
-    let [id, ih, iw] = g.input;
-    let (view, dim) = texture(gpu, [iw, ih, g.n * cpad / 4 * id], wgpu::TextureDimension::D3);
-    if conv_window::pack_x(gpu, pass, g, x, cpad, &view, dim)? {
-        return Ok(Packed::Texture(view, dim));
-    }
-    let p = folded_params(g, &Folded::none(*g), cpad);
-    let args = [Arg::R(x), Arg::StorageTexture(&view, dim)];
-    // Grids: (h, w) or (h, w / 4) along x, depth along y, (item, channel quad) along z.
-    let zq = (g.n * cpad / 4) as u32;
-    let (entry, per) = if iw % 4 == 0 { ("conv_fast_pack_tex_w4", 4) } else { ("conv_fast_pack_tex", 1) };
-    let grid = [(ih * iw / per).div_ceil(64) as u32, id as u32, zq];
-    gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid)?;
-    Ok(Packed::Texture(view, dim))
-}
-
-/// `x` ([N, C, input...] of `g`) copied into a 3D texture of 4 voxels along W a texel, which
-/// the direct kernels read (see `conv_direct.wgsl`); `p` has `g`'s sizes.
-fn stage_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor, p: &Params) -> Result<wgpu::TextureView> {
-    let [id, ih, iw] = g.input;
-    let (view, dim) = texture(gpu, [iw.div_ceil(4), ih, g.n * g.ci * id], wgpu::TextureDimension::D3);
-    if conv_window::stage_x(gpu, pass, g, x, &view, dim)? {
-        return Ok(view);
-    }
-    let entry = if iw % 4 == 0 { "conv_direct_stage_w4" } else { "conv_direct_stage" };
-    let grid = [(iw.div_ceil(4) * ih).div_ceil(64) as u32, id as u32, (g.n * g.ci) as u32];
-    gpu.dispatch(pass, TEX_SHADER, entry, p, &[Arg::R(x), Arg::StorageTexture(&view, dim)], grid)?;
-    Ok(view)
-}
-
-/// Weights packed for the packing parameters `p` (see `pack_weights`), as a texture or buffer.
-/// A parameter's packing is kept from the last run of its graph while the parameters are
-/// unchanged, and then not recorded again (`gpu/constant.rs`).
-fn pack_w(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: &Tensor, tex: bool) -> Result<Packed> {
-    let taps = (p.kd * p.kh * p.kw) as usize;
-    let (width, height) = (p.co16 as usize * 16, taps * p.cpad as usize / 4);
-    let size = [width, height, 1];
-    let dim = wgpu::TextureDimension::D2;
-    let mut key = bytemuck::bytes_of(&p).to_vec();
-    key.push(tex as u8);
-    let kept = gpu.constant_packing(w, &key, (width * height * 16) as u64, || {
-        Ok(if tex { Packing::Texture(gpu.new_rgba32f_texture(size, dim)) } else { Packing::Buffer(Tensor::zeros(gpu, &[taps, p.cpad as usize, width])?) })
-    })?;
-    let (out, valid) = match kept {
-        Some((Packing::Texture(v), valid)) => (Packed::Texture(v, wgpu::TextureViewDimension::D2), valid),
-        Some((Packing::Buffer(t), valid)) => (Packed::Buffer(t), valid),
-        None if tex => (Packed::Texture(texture(gpu, size, dim).0, wgpu::TextureViewDimension::D2), false),
-        None => (Packed::Buffer(gpu.scratch(&[taps, p.cpad as usize, width])?), false),
-    };
-    if valid {
-        return Ok(out);
-    }
-    match &out {
-        Packed::Buffer(t) => pack_weights(gpu, pass, p, w, t)?,
-        Packed::Texture(view, d) => {
-            if !conv_window::pack_w(gpu, pass, p, w, view, *d, width * height)? {
-                dispatch(gpu, pass, "conv_fast_pack_weights_tex", p, &[Arg::R(w), Arg::StorageTexture(view, *d)], width * height)?;
-            }
-        }
-    }
-    Ok(out)
 }
 
 /// The tiled forward with parameters `p` (of the dispatch geometry, output layout included)
