@@ -327,8 +327,9 @@ fn fast_small_channel_counts_forward_and_gradients() {
     check_fast(with(transposed3d([3, 2, 3], [1, 2, 2], explicit([1, 0, 2], [0, 1, 1]), None), 3, 3), 69);
 }
 
-/// The texture family's direct kernels (`conv_direct_forward`, `conv_direct_backward_weight`),
-/// which run the convs the other families fold (few input channels), forced onto textures:
+/// The texture family's direct kernels (`conv_direct_forward`, its `_k5s2` form,
+/// `conv_direct_backward_weight`), which run the convs the other families fold (few input
+/// channels), forced onto textures:
 /// 20 output channels (three groups of 8 over two of 16) at a width of 7 (the stage's scalar
 /// path); 2 input channels, a 3x7 kernel at stride (1, 2) with explicit padding (two chunks of
 /// 4 W taps) at width 12 (the stage's vec4 path); 3 output channels (dy packed 4 to a texel).
@@ -338,16 +339,28 @@ fn direct_kernels_of_few_input_channels() {
     check(&with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 1, 20, [5, 6, 7]), 97);
     check(&with(conv2d([3, 7], [1, 2], Padding::explicit_2d([1, 2], [1, 4])), 2, 6, [1, 6, 12]), 98);
     check(&with(conv3d([3, 3, 3], [2, 1, 1], Padding::Same), 1, 3, [4, 5, 9]), 99);
+    // 5x5 at row stride 2 (`conv_direct_forward_k5s2`): two tiles of output rows (oh 10), two
+    // input channels, a second group of output channels partly filled.
+    check(&with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 2, 9, [3, 19, 11]), 100);
+    // The same at column stride 1, where the fifth W tap falls on every position of a texel.
+    check(&with(conv2d([5, 5], [2, 1], Padding::Same), 1, 5, [1, 17, 9]), 104);
 }
 
-/// The texture family's 4-channel tiles (`conv_fast_forward_tex4`, `..._backward_weight_tex4`)
-/// on heads with enough input channels not to fold (8 -> 3, 16 -> 1, 3x3), forced onto
-/// textures: with fewer input channels the direct kernels run instead.
+/// The texture family's 4- and 8-channel tiles (`conv_fast_forward_tex4`, its `_rows3` form,
+/// `..._tex8`, `..._backward_weight_tex4`) on heads with enough input channels not to fold
+/// (8 -> 3, 16 -> 1, 12 -> 7, 3x3), forced onto textures: with fewer input channels the direct
+/// kernels run instead.
 #[test]
-fn texture_heads_of_at_most_four_output_channels() {
+fn texture_heads_of_at_most_eight_output_channels() {
     let with = |c: Case, ci: usize, co: usize, input: [usize; 3]| Case { ci, co, input, kernel: ConvKernel::Texture, ..c };
     check(&with(conv2d([3, 3], [1, 1], Padding::Same), 8, 3, [1, 5, 9]), 88);
     check(&with(conv2d([3, 3], [1, 1], Padding::Same), 16, 1, [1, 6, 7]), 89);
+    // Two tiles of output rows (oh 11, 9; 3 channels: `conv_fast_forward_tex4_rows3`, whose 3
+    // tap rows share their input rows; 7: `..._tex8`); and 3 tap rows at row stride 2, which
+    // `..._tex8` runs.
+    check(&with(conv2d([3, 3], [1, 1], Padding::Same), 8, 3, [1, 11, 5]), 101);
+    check(&with(conv2d([3, 3], [1, 1], Padding::Same), 12, 7, [1, 9, 10]), 102);
+    check(&with(conv2d([3, 3], [2, 1], Padding::Same), 8, 6, [1, 13, 5]), 103);
 }
 
 /// Widths that are multiples of 4 (12 and 8, not powers of two), where the texture family

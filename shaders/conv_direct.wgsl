@@ -87,58 +87,102 @@ fn taps4(n: u32, c: u32, zd: i32, zh: i32, ws: i32) -> vec4<f32> {
     return window4(stage_texel(n, c, zd, zh, j), stage_texel(n, c, zd, zh, j + 1), u32(ws & 3));
 }
 
-// Row r of tile t (cg: its group of 8 output channels).
-fn put_direct(t: FwdTile, r: u32, a: Acc8) {
-    let oh = t.oh0 + r;
-    if (oh >= p.oh) { return; }
-    let pos = p.yoff + t.od * p.ysd + oh * p.ysh + t.ow * p.ysw;
-    put_raw(t.n, t.cg * 8u, pos, t.ow, a.a0);
-    put_raw(t.n, t.cg * 8u + 4u, pos, t.ow, a.a1);
+// Eight rows `step` apart from row zh on: each row's 4 W taps from `ws` (see taps4).
+fn taps_rows(n: u32, c: u32, zd: i32, zh: i32, step: i32, ws: i32) -> Rows {
+    return Rows(taps4(n, c, zd, zh, ws), taps4(n, c, zd, zh + step, ws), taps4(n, c, zd, zh + 2 * step, ws),
+                taps4(n, c, zd, zh + 3 * step, ws), taps4(n, c, zd, zh + 4 * step, ws), taps4(n, c, zd, zh + 5 * step, ws),
+                taps4(n, c, zd, zh + 6 * step, ws), taps4(n, c, zd, zh + 7 * step, ws));
+}
+
+// The weights of input channel c at taps (kd, kh, kw0..kw0+3) for tile t's 8 output channels:
+// lane l fetches texel (tap kw0 + l / 2, output channels 4 * (l % 2)..+3 of the group), the
+// o4 = 2 * (cg % 2) + l % 2 texel of its 16-channel group, zero past the kernel.
+fn direct_weights(t: FwdTile, lane: u32, base: u32, c: u32, kd: u32, kh: u32, kw0: u32) -> array<vec4<f32>, 8> {
+    let wx = i32((t.cg / 2u) * 16u + 2u * (t.cg % 2u) + (lane & 1u));
+    let kk = kw0 + lane / 2u;
+    let tap = (kd * p.kh + kh) * p.kw + min(kk, p.kw - 1u);
+    let wl = textureLoad(tw, vec2<i32>(wx + i32((c % 4u) * 4u), i32(tap * (p.cpad / 4u) + c / 4u)));
+    return broadcast8(select(vec4<f32>(0.0), wl, kk < p.kw), base);
 }
 
 @compute @workgroup_size(64)
 fn conv_direct_forward(ids: LaneIds) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
-    let lane = tl.y;
-    let base = tl.z;
-    let t = fwd_tile_of(tl.x, lane, (p.co + 7u) / 8u);
-    let cq = p.cpad / 4u;
-    var a0 = Acc8(bias4(t.cg * 8u), bias4(t.cg * 8u + 4u));
-    var a1 = a0; var a2 = a0; var a3 = a0; var a4 = a0; var a5 = a0; var a6 = a0; var a7 = a0;
-    // Lane l fetches weight texel (tap kw0 + l / 2, output channels g*8 + 4 * (l % 2)..+3): the
-    // o4 = 2 * (g % 2) + l % 2 texel of its 16-channel group.
-    let wx = i32((t.cg / 2u) * 16u + 2u * (t.cg % 2u) + (lane & 1u));
-    let zsh = i32(p.sh);
+    let t = fwd_tile_of(tl.x, tl.y, (p.co + 7u) / 8u);
+    var a = tile8(t.cg * 8u);
     for (var kd = 0u; kd < p.kd; kd++) {
-        let zd = i32(t.od * p.sd + kd) - i32(p.pd);
-        if (zd < 0 || zd >= i32(p.id)) { continue; }
+        let zd = tap_depth(t.od, kd);
+        if (zd < 0) { continue; }
         for (var c = 0u; c < p.ci; c++) {
             for (var kh = 0u; kh < p.kh; kh++) {
                 let zh = i32(t.oh0 * p.sh + kh) - i32(p.ph);
                 for (var kw0 = 0u; kw0 < p.kw; kw0 += 4u) {
-                    let kk = kw0 + lane / 2u;
-                    let tap = (kd * p.kh + kh) * p.kw + min(kk, p.kw - 1u);
-                    let wl = textureLoad(tw, vec2<i32>(wx + i32((c % 4u) * 4u), i32(tap * cq + c / 4u)));
-                    let wt = select(vec4<f32>(0.0), wl, kk < p.kw);
-                    let w = array<vec4<f32>, 8>(
-                        subgroupShuffle(wt, base), subgroupShuffle(wt, base + 1u), subgroupShuffle(wt, base + 2u), subgroupShuffle(wt, base + 3u),
-                        subgroupShuffle(wt, base + 4u), subgroupShuffle(wt, base + 5u), subgroupShuffle(wt, base + 6u), subgroupShuffle(wt, base + 7u));
                     let ws = i32(t.ow * p.sw + kw0) - i32(p.pw);
-                    a0 = mac8(a0, taps4(t.n, c, zd, zh, ws), w);
-                    a1 = mac8(a1, taps4(t.n, c, zd, zh + zsh, ws), w);
-                    a2 = mac8(a2, taps4(t.n, c, zd, zh + 2 * zsh, ws), w);
-                    a3 = mac8(a3, taps4(t.n, c, zd, zh + 3 * zsh, ws), w);
-                    a4 = mac8(a4, taps4(t.n, c, zd, zh + 4 * zsh, ws), w);
-                    a5 = mac8(a5, taps4(t.n, c, zd, zh + 5 * zsh, ws), w);
-                    a6 = mac8(a6, taps4(t.n, c, zd, zh + 6 * zsh, ws), w);
-                    a7 = mac8(a7, taps4(t.n, c, zd, zh + 7 * zsh, ws), w);
+                    a = mac_rows8(a, taps_rows(t.n, c, zd, zh, i32(p.sh), ws), direct_weights(t, tl.y, tl.z, c, kd, kh, kw0));
                 }
             }
         }
     }
-    put_direct(t, 0u, a0); put_direct(t, 1u, a1); put_direct(t, 2u, a2); put_direct(t, 3u, a3);
-    put_direct(t, 4u, a4); put_direct(t, 5u, a5); put_direct(t, 6u, a6); put_direct(t, 7u, a7);
+    put_tile8(t, t.cg * 8u, a);
+}
+
+// Tap `ws` alone of row zh (in .x; the kernel's fifth W tap).
+fn tap1(n: u32, c: u32, zd: i32, zh: i32, ws: i32) -> vec4<f32> {
+    let v = stage_texel(n, c, zd, zh, ws >> 2u);
+    let o = ws & 3;
+    return vec4<f32>(select(select(v.x, v.y, o == 1), select(v.z, v.w, o == 3), o >= 2), 0.0, 0.0, 0.0);
+}
+
+fn tap1_rows(n: u32, c: u32, zd: i32, zh: i32, ws: i32) -> Rows {
+    return Rows(tap1(n, c, zd, zh, ws), tap1(n, c, zd, zh + 2, ws), tap1(n, c, zd, zh + 4, ws), tap1(n, c, zd, zh + 6, ws),
+                tap1(n, c, zd, zh + 8, ws), tap1(n, c, zd, zh + 10, ws), tap1(n, c, zd, zh + 12, ws), tap1(n, c, zd, zh + 14, ws));
+}
+
+// Tile += one tap (x.x of each row) times its 8 channels' weights w[0], w[1].
+fn mac_rows8_tap1(a: Tile8, x: Rows, w: array<vec4<f32>, 8>) -> Tile8 {
+    return Tile8(Acc8(a.a0.a0 + x.r0.x * w[0], a.a0.a1 + x.r0.x * w[1]), Acc8(a.a1.a0 + x.r1.x * w[0], a.a1.a1 + x.r1.x * w[1]),
+                 Acc8(a.a2.a0 + x.r2.x * w[0], a.a2.a1 + x.r2.x * w[1]), Acc8(a.a3.a0 + x.r3.x * w[0], a.a3.a1 + x.r3.x * w[1]),
+                 Acc8(a.a4.a0 + x.r4.x * w[0], a.a4.a1 + x.r4.x * w[1]), Acc8(a.a5.a0 + x.r5.x * w[0], a.a5.a1 + x.r5.x * w[1]),
+                 Acc8(a.a6.a0 + x.r6.x * w[0], a.a6.a1 + x.r6.x * w[1]), Acc8(a.a7.a0 + x.r7.x * w[0], a.a7.a1 + x.r7.x * w[1]));
+}
+
+// The same for a 5 x 5 kernel (H x W) at row stride 2 (the first layer's 5^3 s2), each input
+// row fetched once: tap rows kh and kh + 2 read the same rows but one, so the 5 tap rows take
+// 19 row fetches instead of 40 (the most of this kernel's time on lavapipe); and the fifth W
+// tap is multiplied alone, not as a 4-tap chunk of which 3 taps are zero.
+@compute @workgroup_size(64)
+fn conv_direct_forward_k5s2(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    if (tl.x >= p.total) { return; }
+    let t = fwd_tile_of(tl.x, tl.y, (p.co + 7u) / 8u);
+    let zh = i32(t.oh0 * 2u) - i32(p.ph);
+    let ws = i32(t.ow * p.sw) - i32(p.pw);
+    var a = tile8(t.cg * 8u);
+    for (var kd = 0u; kd < p.kd; kd++) {
+        let zd = tap_depth(t.od, kd);
+        if (zd < 0) { continue; }
+        for (var c = 0u; c < p.ci; c++) {
+            let even = taps_rows(t.n, c, zd, zh, 2, ws);
+            let odd = taps_rows(t.n, c, zd, zh + 1, 2, ws);
+            a = mac_rows8(a, even, direct_weights(t, tl.y, tl.z, c, kd, 0u, 0u));
+            a = mac_rows8(a, odd, direct_weights(t, tl.y, tl.z, c, kd, 1u, 0u));
+            let even2 = slide(even, taps4(t.n, c, zd, zh + 16, ws));
+            a = mac_rows8(a, even2, direct_weights(t, tl.y, tl.z, c, kd, 2u, 0u));
+            a = mac_rows8(a, slide(odd, taps4(t.n, c, zd, zh + 17, ws)), direct_weights(t, tl.y, tl.z, c, kd, 3u, 0u));
+            a = mac_rows8(a, slide(even2, taps4(t.n, c, zd, zh + 18, ws)), direct_weights(t, tl.y, tl.z, c, kd, 4u, 0u));
+            // W tap 4.
+            let e = tap1_rows(t.n, c, zd, zh, ws + 4);
+            let o = tap1_rows(t.n, c, zd, zh + 1, ws + 4);
+            a = mac_rows8_tap1(a, e, direct_weights(t, tl.y, tl.z, c, kd, 0u, 4u));
+            a = mac_rows8_tap1(a, o, direct_weights(t, tl.y, tl.z, c, kd, 1u, 4u));
+            let e2 = slide(e, tap1(t.n, c, zd, zh + 16, ws + 4));
+            a = mac_rows8_tap1(a, e2, direct_weights(t, tl.y, tl.z, c, kd, 2u, 4u));
+            a = mac_rows8_tap1(a, slide(o, tap1(t.n, c, zd, zh + 17, ws + 4)), direct_weights(t, tl.y, tl.z, c, kd, 3u, 4u));
+            a = mac_rows8_tap1(a, slide(e2, tap1(t.n, c, zd, zh + 18, ws + 4)), direct_weights(t, tl.y, tl.z, c, kd, 4u, 4u));
+        }
+    }
+    put_tile8(t, t.cg * 8u, a);
 }
 
 // ---- weight gradient: lanes = 8 output columns; each lane 4 W taps x 8 output channels ----

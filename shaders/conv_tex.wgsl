@@ -178,6 +178,24 @@ fn tex_x(n: u32, q: u32, zd: u32, zh: i32, zw: i32) -> vec4<f32> {
     return select(vec4<f32>(0.0), textureLoad(tx, c), inside);
 }
 
+// Eight activation rows of one lane (channel quad q, column zw, depth zd), `step` input rows
+// apart from row zh on.
+struct Rows { r0: vec4<f32>, r1: vec4<f32>, r2: vec4<f32>, r3: vec4<f32>, r4: vec4<f32>, r5: vec4<f32>, r6: vec4<f32>, r7: vec4<f32> }
+
+fn x_rows(n: u32, q: u32, zd: u32, zh: i32, step: i32, zw: i32) -> Rows {
+    return Rows(tex_x(n, q, zd, zh, zw), tex_x(n, q, zd, zh + step, zw), tex_x(n, q, zd, zh + 2 * step, zw),
+                tex_x(n, q, zd, zh + 3 * step, zw), tex_x(n, q, zd, zh + 4 * step, zw), tex_x(n, q, zd, zh + 5 * step, zw),
+                tex_x(n, q, zd, zh + 6 * step, zw), tex_x(n, q, zd, zh + 7 * step, zw));
+}
+
+// The rows one input row further on, `next` the new last: at row stride 1, tap row kh + 1
+// reads 7 of tap row kh's 8 rows again. So conv_fast_forward_tex4_rows3 below fetches a
+// lane's 10 input rows once per (kd, kw, quad) for all 3 tap rows instead of 8 per tap row
+// (24): on lavapipe the texel fetches, not the FMAs, are most of the narrow kernels' work.
+fn slide(x: Rows, next: vec4<f32>) -> Rows {
+    return Rows(x.r1, x.r2, x.r3, x.r4, x.r5, x.r6, x.r7, next);
+}
+
 // One row's 16 accumulators += x (4 input channels) times the broadcast weights.
 struct Acc { a0: vec4<f32>, a1: vec4<f32>, a2: vec4<f32>, a3: vec4<f32> }
 struct W16 { w: array<vec4<f32>, 16> }
@@ -230,64 +248,86 @@ fn fwd_tile_of(t: u32, lane: u32, groups: u32) -> FwdTile {
     return FwdTile(r / groups, r % groups, od, hb * 8u, wb * 8u + lane);
 }
 
+// Output offset of a tile's first row in the output layout.
+fn tile_pos(t: FwdTile) -> u32 {
+    return p.yoff + t.od * p.ysd + t.oh0 * p.ysh + t.ow * p.ysw;
+}
+
+// Input depth of tap kd for output depth od, or -1 off the grid.
+fn tap_depth(od: u32, kd: u32) -> i32 {
+    let zd = i32(od * p.sd + kd) - i32(p.pd);
+    return select(-1, zd, zd >= 0 && zd < i32(p.id));
+}
+
+// A lane's 8 rows x 16 channels.
+struct Tile16 { a0: Acc, a1: Acc, a2: Acc, a3: Acc, a4: Acc, a5: Acc, a6: Acc, a7: Acc }
+
+// Lane l fetches weight texels l and 8 + l of (tap row y, channel group cg): input channel
+// l / 4 (then 2 + l / 4), output quad l % 4, and 16 shuffles hand them to every lane.
+fn weights16(cg: u32, lane: u32, base: u32, y: u32) -> W16 {
+    let wa = textureLoad(tw, vec2<i32>(i32(cg * 16u + lane), i32(y)));
+    let wv = textureLoad(tw, vec2<i32>(i32(cg * 16u + 8u + lane), i32(y)));
+    // Written out: llvmpipe does not unroll loops, and a loop-indexed array would live in memory.
+    return W16(array<vec4<f32>, 16>(
+        subgroupShuffle(wa, base), subgroupShuffle(wa, base + 1u), subgroupShuffle(wa, base + 2u), subgroupShuffle(wa, base + 3u),
+        subgroupShuffle(wa, base + 4u), subgroupShuffle(wa, base + 5u), subgroupShuffle(wa, base + 6u), subgroupShuffle(wa, base + 7u),
+        subgroupShuffle(wv, base), subgroupShuffle(wv, base + 1u), subgroupShuffle(wv, base + 2u), subgroupShuffle(wv, base + 3u),
+        subgroupShuffle(wv, base + 4u), subgroupShuffle(wv, base + 5u), subgroupShuffle(wv, base + 6u), subgroupShuffle(wv, base + 7u)));
+}
+
+fn mac_rows16(a: Tile16, x: Rows, w: W16) -> Tile16 {
+    return Tile16(mac(a.a0, x.r0, w), mac(a.a1, x.r1, w), mac(a.a2, x.r2, w), mac(a.a3, x.r3, w),
+                  mac(a.a4, x.r4, w), mac(a.a5, x.r5, w), mac(a.a6, x.r6, w), mac(a.a7, x.r7, w));
+}
+
+// Accumulators start at the bias: 16 loads a tile instead of one per value written.
+fn tile16(cg: u32) -> Tile16 {
+    let co = cg * 16u;
+    let a = Acc(bias4(co), bias4(co + 4u), bias4(co + 8u), bias4(co + 12u));
+    return Tile16(a, a, a, a, a, a, a, a);
+}
+
+fn put_tile16(t: FwdTile, a: Tile16) {
+    if (t.ow >= p.ow) { return; }
+    let pos = tile_pos(t);
+    let co = t.cg * 16u;
+    put_row(t.n, co, pos, t.ow, t.oh0, a.a0);
+    put_row(t.n, co, pos + p.ysh, t.ow, t.oh0 + 1u, a.a1);
+    put_row(t.n, co, pos + 2u * p.ysh, t.ow, t.oh0 + 2u, a.a2);
+    put_row(t.n, co, pos + 3u * p.ysh, t.ow, t.oh0 + 3u, a.a3);
+    put_row(t.n, co, pos + 4u * p.ysh, t.ow, t.oh0 + 4u, a.a4);
+    put_row(t.n, co, pos + 5u * p.ysh, t.ow, t.oh0 + 5u, a.a5);
+    put_row(t.n, co, pos + 6u * p.ysh, t.ow, t.oh0 + 6u, a.a6);
+    put_row(t.n, co, pos + 7u * p.ysh, t.ow, t.oh0 + 7u, a.a7);
+}
+
+// ---- forward: a subgroup of 8 lanes = 8 outputs along W; each lane 8 rows (H) x 16 channels --
+// 8 rows rather than 4: each shared weight set then feeds twice the FMAs (measured 1.25x on
+// conv3d 16->16 3^3 on 32^3; the accumulators live in memory either way on lavapipe). Sharing
+// rows between tap rows as conv_fast_forward_tex4_rows3 does measured no faster here: with 16
+// channels the FMAs outweigh the fetches.
 @compute @workgroup_size(64)
 fn conv_fast_forward_tex(ids: LaneIds) {
     let tl = lane_tile(ids);
-    let t = tl.x;
-    if (t >= p.total) { return; }
-    let lane = tl.y;
-    let base = tl.z;
-    let ft = fwd_tile(t, lane);
-    let n = ft.n; let cg = ft.cg; let od = ft.od; let oh0 = ft.oh0; let ow = ft.ow;
+    if (tl.x >= p.total) { return; }
+    let ft = fwd_tile(tl.x, tl.y);
     let cq = p.cpad / 4u;
-    // Accumulators start at the bias: 16 loads a tile instead of one per value written.
-    let co = cg * 16u;
-    var a0 = Acc(bias4(co), bias4(co + 4u), bias4(co + 8u), bias4(co + 12u));
-    var a1 = a0; var a2 = a0; var a3 = a0; var a4 = a0; var a5 = a0; var a6 = a0; var a7 = a0;
+    var a = tile16(ft.cg);
     for (var kd = 0u; kd < p.kd; kd++) {
-        let zd = i32(od * p.sd + kd) - i32(p.pd);
-        if (zd < 0 || zd >= i32(p.id)) { continue; }
+        let zd = tap_depth(ft.od, kd);
+        if (zd < 0) { continue; }
         for (var kh = 0u; kh < p.kh; kh++) {
-            let zh = i32(oh0 * p.sh + kh) - i32(p.ph);
-            let zsh = i32(p.sh);
+            let zh = i32(ft.oh0 * p.sh + kh) - i32(p.ph);
             for (var kw = 0u; kw < p.kw; kw++) {
-                let zw = i32(ow * p.sw + kw) - i32(p.pw);
+                let zw = i32(ft.ow * p.sw + kw) - i32(p.pw);
                 let tap = (kd * p.kh + kh) * p.kw + kw;
                 for (var q = 0u; q < cq; q++) {
-                    // Lane l fetches weight texels l and 8 + l of this (tap, q, cg): input
-                    // channel l / 4 (then 2 + l / 4), output quad l % 4.
-                    let wy = i32(tap * cq + q);
-                    let wa = textureLoad(tw, vec2<i32>(i32(cg * 16u + lane), wy));
-                    let wv = textureLoad(tw, vec2<i32>(i32(cg * 16u + 8u + lane), wy));
-                    // Written out: llvmpipe does not unroll loops, and a loop-indexed array
-                    // would live in memory.
-                    let w = W16(array<vec4<f32>, 16>(
-                        subgroupShuffle(wa, base), subgroupShuffle(wa, base + 1u), subgroupShuffle(wa, base + 2u), subgroupShuffle(wa, base + 3u),
-                        subgroupShuffle(wa, base + 4u), subgroupShuffle(wa, base + 5u), subgroupShuffle(wa, base + 6u), subgroupShuffle(wa, base + 7u),
-                        subgroupShuffle(wv, base), subgroupShuffle(wv, base + 1u), subgroupShuffle(wv, base + 2u), subgroupShuffle(wv, base + 3u),
-                        subgroupShuffle(wv, base + 4u), subgroupShuffle(wv, base + 5u), subgroupShuffle(wv, base + 6u), subgroupShuffle(wv, base + 7u)));
-                    a0 = mac(a0, tex_x(n, q, u32(zd), zh, zw), w);
-                    a1 = mac(a1, tex_x(n, q, u32(zd), zh + zsh, zw), w);
-                    a2 = mac(a2, tex_x(n, q, u32(zd), zh + 2 * zsh, zw), w);
-                    a3 = mac(a3, tex_x(n, q, u32(zd), zh + 3 * zsh, zw), w);
-                    a4 = mac(a4, tex_x(n, q, u32(zd), zh + 4 * zsh, zw), w);
-                    a5 = mac(a5, tex_x(n, q, u32(zd), zh + 5 * zsh, zw), w);
-                    a6 = mac(a6, tex_x(n, q, u32(zd), zh + 6 * zsh, zw), w);
-                    a7 = mac(a7, tex_x(n, q, u32(zd), zh + 7 * zsh, zw), w);
+                    a = mac_rows16(a, x_rows(ft.n, q, u32(zd), zh, i32(p.sh), zw), weights16(ft.cg, tl.y, tl.z, tap * cq + q));
                 }
             }
         }
     }
-    if (ow >= p.ow) { return; }
-    let pos = p.yoff + od * p.ysd + oh0 * p.ysh + ow * p.ysw;
-    put_row(n, co, pos, ow, oh0, a0);
-    put_row(n, co, pos + p.ysh, ow, oh0 + 1u, a1);
-    put_row(n, co, pos + 2u * p.ysh, ow, oh0 + 2u, a2);
-    put_row(n, co, pos + 3u * p.ysh, ow, oh0 + 3u, a3);
-    put_row(n, co, pos + 4u * p.ysh, ow, oh0 + 4u, a4);
-    put_row(n, co, pos + 5u * p.ysh, ow, oh0 + 5u, a5);
-    put_row(n, co, pos + 6u * p.ysh, ow, oh0 + 6u, a6);
-    put_row(n, co, pos + 7u * p.ysh, ow, oh0 + 7u, a7);
+    put_tile16(ft, a);
 }
 
 // ---- forward, half width (co <= 8): a subgroup = 8 outputs along W; each lane 8 rows x 8 channels
@@ -301,61 +341,72 @@ fn mac8(acc: Acc8, x: vec4<f32>, w: array<vec4<f32>, 8>) -> Acc8 {
                 acc.a1 + x.x * w[1] + x.y * w[3] + x.z * w[5] + x.w * w[7]);
 }
 
-fn put_row8(n: u32, pos: u32, ow: u32, oh: u32, a: Acc8) {
+// Output channels co..co+7 of one row.
+fn put_row8(n: u32, co: u32, pos: u32, ow: u32, oh: u32, a: Acc8) {
     if (oh >= p.oh) { return; }
-    put_raw(n, 0u, pos, ow, a.a0); put_raw(n, 4u, pos, ow, a.a1);
+    put_raw(n, co, pos, ow, a.a0); put_raw(n, co + 4u, pos, ow, a.a1);
+}
+
+struct Tile8 { a0: Acc8, a1: Acc8, a2: Acc8, a3: Acc8, a4: Acc8, a5: Acc8, a6: Acc8, a7: Acc8 }
+
+// Lane j's texel `wt` to every lane: wt of lane j is element j.
+fn broadcast8(wt: vec4<f32>, base: u32) -> array<vec4<f32>, 8> {
+    return array<vec4<f32>, 8>(
+        subgroupShuffle(wt, base), subgroupShuffle(wt, base + 1u), subgroupShuffle(wt, base + 2u), subgroupShuffle(wt, base + 3u),
+        subgroupShuffle(wt, base + 4u), subgroupShuffle(wt, base + 5u), subgroupShuffle(wt, base + 6u), subgroupShuffle(wt, base + 7u));
+}
+
+fn weights8(lane: u32, base: u32, y: u32) -> array<vec4<f32>, 8> {
+    return broadcast8(textureLoad(tw, vec2<i32>(i32((lane / 2u) * 4u + (lane & 1u)), i32(y))), base);
+}
+
+fn mac_rows8(a: Tile8, x: Rows, w: array<vec4<f32>, 8>) -> Tile8 {
+    return Tile8(mac8(a.a0, x.r0, w), mac8(a.a1, x.r1, w), mac8(a.a2, x.r2, w), mac8(a.a3, x.r3, w),
+                 mac8(a.a4, x.r4, w), mac8(a.a5, x.r5, w), mac8(a.a6, x.r6, w), mac8(a.a7, x.r7, w));
+}
+
+// Accumulators of output channels co..co+7 at their bias.
+fn tile8(co: u32) -> Tile8 {
+    let a = Acc8(bias4(co), bias4(co + 4u));
+    return Tile8(a, a, a, a, a, a, a, a);
+}
+
+fn put_tile8(t: FwdTile, co: u32, a: Tile8) {
+    if (t.ow >= p.ow) { return; }
+    let pos = tile_pos(t);
+    put_row8(t.n, co, pos, t.ow, t.oh0, a.a0);
+    put_row8(t.n, co, pos + p.ysh, t.ow, t.oh0 + 1u, a.a1);
+    put_row8(t.n, co, pos + 2u * p.ysh, t.ow, t.oh0 + 2u, a.a2);
+    put_row8(t.n, co, pos + 3u * p.ysh, t.ow, t.oh0 + 3u, a.a3);
+    put_row8(t.n, co, pos + 4u * p.ysh, t.ow, t.oh0 + 4u, a.a4);
+    put_row8(t.n, co, pos + 5u * p.ysh, t.ow, t.oh0 + 5u, a.a5);
+    put_row8(t.n, co, pos + 6u * p.ysh, t.ow, t.oh0 + 6u, a.a6);
+    put_row8(t.n, co, pos + 7u * p.ysh, t.ow, t.oh0 + 7u, a.a7);
 }
 
 @compute @workgroup_size(64)
 fn conv_fast_forward_tex8(ids: LaneIds) {
     let tl = lane_tile(ids);
-    let t = tl.x;
-    if (t >= p.total) { return; }
-    let lane = tl.y;
-    let base = tl.z;
+    if (tl.x >= p.total) { return; }
     // co16 = 1: channel group 0.
-    let ft = fwd_tile(t, lane);
-    let n = ft.n; let od = ft.od; let oh0 = ft.oh0; let ow = ft.ow;
+    let ft = fwd_tile(tl.x, tl.y);
     let cq = p.cpad / 4u;
-    let wx = i32((lane / 2u) * 4u + (lane & 1u));
-    var a0 = Acc8(bias4(0u), bias4(4u));
-    var a1 = a0; var a2 = a0; var a3 = a0; var a4 = a0; var a5 = a0; var a6 = a0; var a7 = a0;
+    var a = tile8(0u);
     for (var kd = 0u; kd < p.kd; kd++) {
-        let zd = i32(od * p.sd + kd) - i32(p.pd);
-        if (zd < 0 || zd >= i32(p.id)) { continue; }
+        let zd = tap_depth(ft.od, kd);
+        if (zd < 0) { continue; }
         for (var kh = 0u; kh < p.kh; kh++) {
-            let zh = i32(oh0 * p.sh + kh) - i32(p.ph);
-            let zsh = i32(p.sh);
+            let zh = i32(ft.oh0 * p.sh + kh) - i32(p.ph);
             for (var kw = 0u; kw < p.kw; kw++) {
-                let zw = i32(ow * p.sw + kw) - i32(p.pw);
+                let zw = i32(ft.ow * p.sw + kw) - i32(p.pw);
                 let tap = (kd * p.kh + kh) * p.kw + kw;
                 for (var q = 0u; q < cq; q++) {
-                    let wa = textureLoad(tw, vec2<i32>(wx, i32(tap * cq + q)));
-                    let w = array<vec4<f32>, 8>(
-                        subgroupShuffle(wa, base), subgroupShuffle(wa, base + 1u), subgroupShuffle(wa, base + 2u), subgroupShuffle(wa, base + 3u),
-                        subgroupShuffle(wa, base + 4u), subgroupShuffle(wa, base + 5u), subgroupShuffle(wa, base + 6u), subgroupShuffle(wa, base + 7u));
-                    a0 = mac8(a0, tex_x(n, q, u32(zd), zh, zw), w);
-                    a1 = mac8(a1, tex_x(n, q, u32(zd), zh + zsh, zw), w);
-                    a2 = mac8(a2, tex_x(n, q, u32(zd), zh + 2 * zsh, zw), w);
-                    a3 = mac8(a3, tex_x(n, q, u32(zd), zh + 3 * zsh, zw), w);
-                    a4 = mac8(a4, tex_x(n, q, u32(zd), zh + 4 * zsh, zw), w);
-                    a5 = mac8(a5, tex_x(n, q, u32(zd), zh + 5 * zsh, zw), w);
-                    a6 = mac8(a6, tex_x(n, q, u32(zd), zh + 6 * zsh, zw), w);
-                    a7 = mac8(a7, tex_x(n, q, u32(zd), zh + 7 * zsh, zw), w);
+                    a = mac_rows8(a, x_rows(ft.n, q, u32(zd), zh, i32(p.sh), zw), weights8(tl.y, tl.z, tap * cq + q));
                 }
             }
         }
     }
-    if (ow >= p.ow) { return; }
-    let pos = p.yoff + od * p.ysd + oh0 * p.ysh + ow * p.ysw;
-    put_row8(n, pos, ow, oh0, a0);
-    put_row8(n, pos + p.ysh, ow, oh0 + 1u, a1);
-    put_row8(n, pos + 2u * p.ysh, ow, oh0 + 2u, a2);
-    put_row8(n, pos + 3u * p.ysh, ow, oh0 + 3u, a3);
-    put_row8(n, pos + 4u * p.ysh, ow, oh0 + 4u, a4);
-    put_row8(n, pos + 5u * p.ysh, ow, oh0 + 5u, a5);
-    put_row8(n, pos + 6u * p.ysh, ow, oh0 + 6u, a6);
-    put_row8(n, pos + 7u * p.ysh, ow, oh0 + 7u, a7);
+    put_tile8(ft, 0u, a);
 }
 
 // ---- forward, narrow (co <= 4): a subgroup = 8 outputs along W; each lane 8 rows x 4 channels --
@@ -370,54 +421,90 @@ fn put4(n: u32, pos: u32, ow: u32, oh: u32, a: vec4<f32>) {
     if (oh < p.oh) { put_raw(n, 0u, pos, ow, a); }
 }
 
+struct W4 { w0: vec4<f32>, w1: vec4<f32>, w2: vec4<f32>, w3: vec4<f32> }
+
+fn weights4(lane: u32, base: u32, y: u32) -> W4 {
+    let wa = textureLoad(tw, vec2<i32>(i32((lane & 3u) * 4u), i32(y)));
+    return W4(subgroupShuffle(wa, base), subgroupShuffle(wa, base + 1u), subgroupShuffle(wa, base + 2u), subgroupShuffle(wa, base + 3u));
+}
+
+// The 8 rows' 4 channels are a `Rows` too.
+fn mac_rows4(a: Rows, x: Rows, w: W4) -> Rows {
+    return Rows(mac4(a.r0, x.r0, w.w0, w.w1, w.w2, w.w3), mac4(a.r1, x.r1, w.w0, w.w1, w.w2, w.w3),
+                mac4(a.r2, x.r2, w.w0, w.w1, w.w2, w.w3), mac4(a.r3, x.r3, w.w0, w.w1, w.w2, w.w3),
+                mac4(a.r4, x.r4, w.w0, w.w1, w.w2, w.w3), mac4(a.r5, x.r5, w.w0, w.w1, w.w2, w.w3),
+                mac4(a.r6, x.r6, w.w0, w.w1, w.w2, w.w3), mac4(a.r7, x.r7, w.w0, w.w1, w.w2, w.w3));
+}
+
+fn tile4() -> Rows {
+    let a = bias4(0u);
+    return Rows(a, a, a, a, a, a, a, a);
+}
+
+fn put_tile4(t: FwdTile, a: Rows) {
+    if (t.ow >= p.ow) { return; }
+    let pos = tile_pos(t);
+    put4(t.n, pos, t.ow, t.oh0, a.r0);
+    put4(t.n, pos + p.ysh, t.ow, t.oh0 + 1u, a.r1);
+    put4(t.n, pos + 2u * p.ysh, t.ow, t.oh0 + 2u, a.r2);
+    put4(t.n, pos + 3u * p.ysh, t.ow, t.oh0 + 3u, a.r3);
+    put4(t.n, pos + 4u * p.ysh, t.ow, t.oh0 + 4u, a.r4);
+    put4(t.n, pos + 5u * p.ysh, t.ow, t.oh0 + 5u, a.r5);
+    put4(t.n, pos + 6u * p.ysh, t.ow, t.oh0 + 6u, a.r6);
+    put4(t.n, pos + 7u * p.ysh, t.ow, t.oh0 + 7u, a.r7);
+}
+
 @compute @workgroup_size(64)
 fn conv_fast_forward_tex4(ids: LaneIds) {
     let tl = lane_tile(ids);
-    let t = tl.x;
-    if (t >= p.total) { return; }
-    let lane = tl.y;
-    let base = tl.z;
+    if (tl.x >= p.total) { return; }
     // co16 = 1: channel group 0.
-    let ft = fwd_tile(t, lane);
-    let n = ft.n; let od = ft.od; let oh0 = ft.oh0; let ow = ft.ow;
+    let ft = fwd_tile(tl.x, tl.y);
     let cq = p.cpad / 4u;
-    var a0 = bias4(0u);
-    var a1 = a0; var a2 = a0; var a3 = a0; var a4 = a0; var a5 = a0; var a6 = a0; var a7 = a0;
+    var a = tile4();
     for (var kd = 0u; kd < p.kd; kd++) {
-        let zd = i32(od * p.sd + kd) - i32(p.pd);
-        if (zd < 0 || zd >= i32(p.id)) { continue; }
+        let zd = tap_depth(ft.od, kd);
+        if (zd < 0) { continue; }
         for (var kh = 0u; kh < p.kh; kh++) {
-            let zh = i32(oh0 * p.sh + kh) - i32(p.ph);
-            let zsh = i32(p.sh);
+            let zh = i32(ft.oh0 * p.sh + kh) - i32(p.ph);
             for (var kw = 0u; kw < p.kw; kw++) {
-                let zw = i32(ow * p.sw + kw) - i32(p.pw);
+                let zw = i32(ft.ow * p.sw + kw) - i32(p.pw);
                 let tap = (kd * p.kh + kh) * p.kw + kw;
                 for (var q = 0u; q < cq; q++) {
-                    let wa = textureLoad(tw, vec2<i32>(i32((lane & 3u) * 4u), i32(tap * cq + q)));
-                    let w0 = subgroupShuffle(wa, base); let w1 = subgroupShuffle(wa, base + 1u);
-                    let w2 = subgroupShuffle(wa, base + 2u); let w3 = subgroupShuffle(wa, base + 3u);
-                    a0 = mac4(a0, tex_x(n, q, u32(zd), zh, zw), w0, w1, w2, w3);
-                    a1 = mac4(a1, tex_x(n, q, u32(zd), zh + zsh, zw), w0, w1, w2, w3);
-                    a2 = mac4(a2, tex_x(n, q, u32(zd), zh + 2 * zsh, zw), w0, w1, w2, w3);
-                    a3 = mac4(a3, tex_x(n, q, u32(zd), zh + 3 * zsh, zw), w0, w1, w2, w3);
-                    a4 = mac4(a4, tex_x(n, q, u32(zd), zh + 4 * zsh, zw), w0, w1, w2, w3);
-                    a5 = mac4(a5, tex_x(n, q, u32(zd), zh + 5 * zsh, zw), w0, w1, w2, w3);
-                    a6 = mac4(a6, tex_x(n, q, u32(zd), zh + 6 * zsh, zw), w0, w1, w2, w3);
-                    a7 = mac4(a7, tex_x(n, q, u32(zd), zh + 7 * zsh, zw), w0, w1, w2, w3);
+                    a = mac_rows4(a, x_rows(ft.n, q, u32(zd), zh, i32(p.sh), zw), weights4(tl.y, tl.z, tap * cq + q));
                 }
             }
         }
     }
-    if (ow >= p.ow) { return; }
-    let pos = p.yoff + od * p.ysd + oh0 * p.ysh + ow * p.ysw;
-    put4(n, pos, ow, oh0, a0);
-    put4(n, pos + p.ysh, ow, oh0 + 1u, a1);
-    put4(n, pos + 2u * p.ysh, ow, oh0 + 2u, a2);
-    put4(n, pos + 3u * p.ysh, ow, oh0 + 3u, a3);
-    put4(n, pos + 4u * p.ysh, ow, oh0 + 4u, a4);
-    put4(n, pos + 5u * p.ysh, ow, oh0 + 5u, a5);
-    put4(n, pos + 6u * p.ysh, ow, oh0 + 6u, a6);
-    put4(n, pos + 7u * p.ysh, ow, oh0 + 7u, a7);
+    put_tile4(ft, a);
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_forward_tex4_rows3(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    if (tl.x >= p.total) { return; }
+    let ft = fwd_tile(tl.x, tl.y);
+    let cq = p.cpad / 4u;
+    let zh = i32(ft.oh0) - i32(p.ph);
+    var a = tile4();
+    for (var kd = 0u; kd < p.kd; kd++) {
+        let zd = tap_depth(ft.od, kd);
+        if (zd < 0) { continue; }
+        for (var kw = 0u; kw < p.kw; kw++) {
+            let zw = i32(ft.ow * p.sw + kw) - i32(p.pw);
+            // Weight row of tap (kd, kh = 0, kw); kh = 1, 2 are p.kw taps further on.
+            let y = (kd * 3u * p.kw + kw) * cq;
+            for (var q = 0u; q < cq; q++) {
+                let x = x_rows(ft.n, q, u32(zd), zh, 1, zw);
+                let x1 = slide(x, tex_x(ft.n, q, u32(zd), zh + 8, zw));
+                let x2 = slide(x1, tex_x(ft.n, q, u32(zd), zh + 9, zw));
+                a = mac_rows4(a, x, weights4(tl.y, tl.z, y + q));
+                a = mac_rows4(a, x1, weights4(tl.y, tl.z, y + p.kw * cq + q));
+                a = mac_rows4(a, x2, weights4(tl.y, tl.z, y + 2u * p.kw * cq + q));
+            }
+        }
+    }
+    put_tile4(ft, a);
 }
 
 // ---- backward weight: lanes = 8 (tap, input channel quad) pairs; dy shared by shuffles ----

@@ -185,8 +185,10 @@ fn forward_packed(
         let tiles = (p.n * p.co16 * p.od * p.oh.div_ceil(8) * p.ow.div_ceil(8)) as usize;
         let p = Params { total: tiles as u32, ..p };
         // At most 4 or 8 output channels: the 4- or 8-channel tile (co16 = 1, so the same
-        // tile count).
+        // tile count); with 4 and 3 tap rows at row stride 1 (the 3x3 heads), `_rows3`
+        // fetches each input row once for all three tap rows.
         let entry = match p.co {
+            ..=4 if p.kh == 3 && p.sh == 1 => "conv_fast_forward_tex4_rows3",
             ..=4 => "conv_fast_forward_tex4",
             5..=8 => "conv_fast_forward_tex8",
             _ => "conv_fast_forward_tex",
@@ -233,7 +235,9 @@ fn forward_direct(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: 
     let tiles = g.n * g.co.div_ceil(8) * volume([g.output[0], g.output[1].div_ceil(8), g.output[2].div_ceil(8)]);
     let p = Params { has_bias: b.is_some() as u32, total: tiles as u32, ..p };
     let args = [Arg::ReadStorageTexture(&stage, wgpu::TextureViewDimension::D3), wp.arg(), b.map_or(Arg::Absent, Arg::R), Arg::W(y)];
-    gpu.dispatch(pass, TEX_SHADER, "conv_direct_forward", &p, &args, grid_1d(tiles as u64 * 8, 64)?)
+    // A 5 x 5 kernel at row stride 2 (the first layer): each input row fetched once.
+    let entry = if g.kernel[1] == 5 && g.kernel[2] == 5 && g.stride[1] == 2 { "conv_direct_forward_k5s2" } else { "conv_direct_forward" };
+    gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?)
 }
 
 /// One output phase `r` of a backward-input conv along one axis (see the shader header):
