@@ -210,58 +210,38 @@ fn tile_sum(v: vec4<f32>) -> vec4<f32> {
     return b + subgroupShuffleXor(b, 4u);
 }
 
-// Column of a weight-gradient tile: (kd, c, kh, first W tap, group of 8 output channels).
+// Column of a weight-gradient tile: (kd, c, kh, first W tap, group of 8 output channels), of
+// `nkh` tap rows a column (p.kh, or 1 where a tile takes every tap row: kh = 0).
 struct DirectColumn { kd: u32, c: u32, kh: u32, kw0: u32, g: u32 }
 
-fn direct_column(col: u32) -> DirectColumn {
+fn direct_column(col: u32, nkh: u32) -> DirectColumn {
     let groups = (p.co + 7u) / 8u;
     let nkw = (p.kw + 3u) / 4u;
     var r = col;
     let g = r % groups; r /= groups;
     let kw0 = (r % nkw) * 4u; r /= nkw;
-    let kh = r % p.kh; r /= p.kh;
+    let kh = r % nkh; r /= nkh;
     return DirectColumn(r / p.ci, r % p.ci, kh, kw0, g);
 }
 
-@compute @workgroup_size(64)
-fn conv_direct_backward_weight(ids: LaneIds) {
-    let tl = lane_tile(ids);
-    if (tl.x >= p.total) { return; }
-    let lane = tl.y;
-    let cols = p.kd * p.ci * p.kh * ((p.kw + 3u) / 4u) * ((p.co + 7u) / 8u);
-    let k = direct_column(tl.x % cols);
-    let chunk = tl.x / cols;
-    let span = chunk_rows(chunk);
+// dy of output channels g*8..g*8+7 at (n, od, oh, ow) (zero past the row or the channels):
+// two texels of the dy texture of conv_fast_pack_tex(_w4), dq quads per voxel.
+struct DyPair { lo: vec4<f32>, hi: vec4<f32> }
+
+fn dy_pair(g: u32, n: u32, od: u32, oh: u32, ow: u32) -> DyPair {
     // dy texels per voxel: 1 for the 4-channel packing, else co16 * 4.
     let dq = select(p.co16 * 4u, 1u, p.co <= 4u);
-    let q1 = min(2u * k.g + 1u, dq - 1u);
-    let has_hi = 2u * k.g + 1u < dq;
-    var acc: Acc32;
-    // Row counters (n, od, oh), advanced without dividing.
-    var oh = span.x % p.oh;
-    var od = (span.x / p.oh) % p.od;
-    var n = span.x / (p.oh * p.od);
-    for (var row = span.x; row < span.y; row++) {
-        let zd = i32(od * p.sd + k.kd) - i32(p.pd);
-        let zh = i32(oh * p.sh + k.kh) - i32(p.ph);
-        if (zd >= 0 && zd < i32(p.id) && zh >= 0 && zh < i32(p.ih)) {
-            let dz0 = i32((n * dq + 2u * k.g) * p.od + od);
-            let dz1 = i32((n * dq + q1) * p.od + od);
-            for (var ow0 = 0u; ow0 < p.ow; ow0 += 8u) {
-                let ow = ow0 + lane;
-                let ok = ow < p.ow;
-                let dc = vec2<i32>(i32(min(ow, p.ow - 1u)), i32(oh));
-                let dlo = select(vec4<f32>(0.0), textureLoad(bdy, vec3<i32>(dc, dz0)), ok);
-                let dhi = select(vec4<f32>(0.0), textureLoad(bdy, vec3<i32>(dc, dz1)), ok && has_hi);
-                let x = taps4(n, k.c, zd, zh, i32(ow * p.sw + k.kw0) - i32(p.pw));
-                acc = bw_direct_step(acc, x, dlo, dhi);
-            }
-        }
-        oh += 1u;
-        if (oh == p.oh) { oh = 0u; od += 1u; }
-        if (od == p.od) { od = 0u; n += 1u; }
-    }
-    // Lane l writes tap kw0 + l / 2, output channels g * 8 + 4 * (l % 2)..+3.
+    let q1 = min(2u * g + 1u, dq - 1u);
+    let ok = ow < p.ow;
+    let dc = vec2<i32>(i32(min(ow, p.ow - 1u)), i32(oh));
+    let lo = textureLoad(bdy, vec3<i32>(dc, i32((n * dq + 2u * g) * p.od + od)));
+    let hi = textureLoad(bdy, vec3<i32>(dc, i32((n * dq + q1) * p.od + od)));
+    return DyPair(select(vec4<f32>(0.0), lo, ok), select(vec4<f32>(0.0), hi, ok && 2u * g + 1u < dq));
+}
+
+// Sums tap row kh's accumulators over the tile's lanes and writes lane l's share, tap
+// kw0 + l / 2 and output channels g * 8 + 4 * (l % 2)..+3, to part[chunk].
+fn put_direct_dw(acc: Acc32, k: DirectColumn, kh: u32, chunk: u32, lane: u32) {
     var mine = vec4<f32>(0.0);
     for (var kk = 0u; kk < 4u; kk++) {
         let lo = tile_sum(acc.lo[kk]);
@@ -272,11 +252,85 @@ fn conv_direct_backward_weight(ids: LaneIds) {
     let kw = k.kw0 + lane / 2u;
     if (kw >= p.kw) { return; }
     let taps = p.kd * p.kh * p.kw;
-    let tap = (k.kd * p.kh + k.kh) * p.kw + kw;
+    let tap = (k.kd * p.kh + kh) * p.kw + kw;
     let copad = p.co16 * 16u;
     let o = ((chunk * taps + tap) * p.cpad + k.c) * copad + k.g * 8u + 4u * (lane & 1u);
     bpart[o] = mine.x;
     bpart[o + 1u] = mine.y;
     bpart[o + 2u] = mine.z;
     bpart[o + 3u] = mine.w;
+}
+
+@compute @workgroup_size(64)
+fn conv_direct_backward_weight(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    if (tl.x >= p.total) { return; }
+    let lane = tl.y;
+    let cols = p.kd * p.ci * p.kh * ((p.kw + 3u) / 4u) * ((p.co + 7u) / 8u);
+    let k = direct_column(tl.x % cols, p.kh);
+    let chunk = tl.x / cols;
+    let span = chunk_rows(chunk);
+    var acc: Acc32;
+    // Row counters (n, od, oh), advanced without dividing.
+    var oh = span.x % p.oh;
+    var od = (span.x / p.oh) % p.od;
+    var n = span.x / (p.oh * p.od);
+    for (var row = span.x; row < span.y; row++) {
+        let zd = i32(od * p.sd + k.kd) - i32(p.pd);
+        let zh = i32(oh * p.sh + k.kh) - i32(p.ph);
+        if (zd >= 0 && zd < i32(p.id) && zh >= 0 && zh < i32(p.ih)) {
+            for (var ow0 = 0u; ow0 < p.ow; ow0 += 8u) {
+                let ow = ow0 + lane;
+                let d = dy_pair(k.g, n, od, oh, ow);
+                let x = taps4(n, k.c, zd, zh, i32(ow * p.sw + k.kw0) - i32(p.pw));
+                acc = bw_direct_step(acc, x, d.lo, d.hi);
+            }
+        }
+        oh += 1u;
+        if (oh == p.oh) { oh = 0u; od += 1u; }
+        if (od == p.od) { od = 0u; n += 1u; }
+    }
+    put_direct_dw(acc, k, k.kh, chunk, lane);
+}
+
+// The same for 5 tap rows (the first layer's 5^3), a tile taking all 5: each dy pair fetched
+// feeds 5 tap rows' windows (12 texel fetches for 5 x 32 multiply-adds instead of 20), and the
+// tap rows off the grid read zeros from taps4 instead of being skipped.
+@compute @workgroup_size(64)
+fn conv_direct_backward_weight_k5(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    if (tl.x >= p.total) { return; }
+    let lane = tl.y;
+    let cols = p.kd * p.ci * ((p.kw + 3u) / 4u) * ((p.co + 7u) / 8u);
+    let k = direct_column(tl.x % cols, 1u);
+    let chunk = tl.x / cols;
+    let span = chunk_rows(chunk);
+    var a0: Acc32; var a1: Acc32; var a2: Acc32; var a3: Acc32; var a4: Acc32;
+    var oh = span.x % p.oh;
+    var od = (span.x / p.oh) % p.od;
+    var n = span.x / (p.oh * p.od);
+    for (var row = span.x; row < span.y; row++) {
+        let zd = i32(od * p.sd + k.kd) - i32(p.pd);
+        let zh = i32(oh * p.sh) - i32(p.ph);
+        if (zd >= 0 && zd < i32(p.id)) {
+            for (var ow0 = 0u; ow0 < p.ow; ow0 += 8u) {
+                let ow = ow0 + lane;
+                let d = dy_pair(k.g, n, od, oh, ow);
+                let ws = i32(ow * p.sw + k.kw0) - i32(p.pw);
+                a0 = bw_direct_step(a0, taps4(n, k.c, zd, zh, ws), d.lo, d.hi);
+                a1 = bw_direct_step(a1, taps4(n, k.c, zd, zh + 1, ws), d.lo, d.hi);
+                a2 = bw_direct_step(a2, taps4(n, k.c, zd, zh + 2, ws), d.lo, d.hi);
+                a3 = bw_direct_step(a3, taps4(n, k.c, zd, zh + 3, ws), d.lo, d.hi);
+                a4 = bw_direct_step(a4, taps4(n, k.c, zd, zh + 4, ws), d.lo, d.hi);
+            }
+        }
+        oh += 1u;
+        if (oh == p.oh) { oh = 0u; od += 1u; }
+        if (od == p.od) { od = 0u; n += 1u; }
+    }
+    put_direct_dw(a0, k, 0u, chunk, lane);
+    put_direct_dw(a1, k, 1u, chunk, lane);
+    put_direct_dw(a2, k, 2u, chunk, lane);
+    put_direct_dw(a3, k, 3u, chunk, lane);
+    put_direct_dw(a4, k, 4u, chunk, lane);
 }

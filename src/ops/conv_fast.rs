@@ -436,7 +436,10 @@ fn backward_weight_direct(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geome
     let cpad = g.ci.div_ceil(4) * 4;
     let p = params(g, cpad);
     let stage = stage_x(gpu, pass, g, x, &p)?;
-    let cols = g.kernel[0] * g.ci * g.kernel[1] * g.kernel[2].div_ceil(4) * g.co.div_ceil(8);
+    // 5 tap rows (the first layer): `_k5` tiles take all 5, sharing each dy fetch.
+    let k5 = g.kernel[1] == 5;
+    let (entry, nkh) = if k5 { ("conv_direct_backward_weight_k5", 1) } else { ("conv_direct_backward_weight", g.kernel[1]) };
+    let cols = g.kernel[0] * g.ci * nkh * g.kernel[2].div_ceil(4) * g.co.div_ceil(8);
     // Chunks of output rows: ~256 tiles (32 workgroups), never more chunks than rows.
     let rows = g.n * g.output[0] * g.output[1];
     let chunk = rows.div_ceil(256usize.div_ceil(cols).clamp(1, rows));
@@ -445,7 +448,7 @@ fn backward_weight_direct(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geome
     let tiles = nchunks * cols;
     let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, total: tiles as u32, ..p };
     let args = [Arg::ReadStorageTexture(&stage, wgpu::TextureViewDimension::D3), dyp.arg(), Arg::W(&part)];
-    gpu.dispatch(pass, TEX_SHADER, "conv_direct_backward_weight", &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
+    gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
     dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
 }
 
