@@ -1,0 +1,326 @@
+//! The tiled conv kernels (`ConvKernel::Buffers` and `ConvKernel::Texture`, src/ops/conv_fast.rs)
+//! against the reference kernels and the f64 references of `conv.rs`, whose cases, helpers and
+//! tolerances they share: every layer form again per family, the texture family's special tiles
+//! (direct first-layer kernels, narrow heads, packing through uniform windows), random shapes,
+//! and both gradients in one call.
+
+use super::*;
+
+/// Every case above, again with each family of tiled kernels forced (`ConvKernel::Buffers`
+/// reads buffers, `ConvKernel::Texture` textures and subgroup shuffles for the forward and
+/// backward-input passes).
+fn check_fast(c: Case, seed: u64) {
+    check(&Case { kernel: ConvKernel::Buffers, ..c }, seed);
+    check(&Case { kernel: ConvKernel::Texture, ..c }, seed);
+}
+
+#[test]
+fn fast_conv3d_forward_and_gradients() {
+    check_fast(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 40);
+    check_fast(conv3d([3, 3, 3], [1, 1, 2], Padding::Same), 41);
+    check_fast(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 42);
+    check_fast(conv3d([2, 3, 4], [1, 1, 1], Padding::Same), 43);
+    check_fast(conv3d([1, 1, 1], [1, 1, 1], Padding::Same), 44);
+    check_fast(conv3d([3, 3, 3], [2, 2, 2], explicit([1, 0, 2], [0, 2, 1])), 45);
+}
+
+#[test]
+fn fast_conv2d_and_transposed_forward_and_gradients() {
+    check_fast(conv2d([3, 3], [1, 1], Padding::Same), 50);
+    check_fast(conv2d([4, 4], [1, 1], Padding::Same), 51);
+    check_fast(conv2d([4, 3], [2, 1], Padding::explicit_2d([2, 0], [1, 1])), 52);
+    check_fast(transposed2d([4, 4], [2, 2], Padding::Same, None), 53);
+    check_fast(transposed2d([4, 4], [1, 1], Padding::Same, None), 54);
+    check_fast(transposed2d([3, 3], [2, 2], Padding::explicit_2d([1, 1], [1, 1]), Some([1, 8, 10])), 55);
+    check_fast(transposed3d([3, 2, 3], [1, 2, 2], explicit([1, 0, 2], [0, 1, 1]), None), 56);
+}
+
+/// Strided backward input (and transposed forward) runs one stride-1 conv per output phase
+/// with a sub-kernel of the taps that reach it: a 1x1 stride-2 kernel (phases with no taps,
+/// dx zero there), padding before larger than the kernel (negative phase padding), stride 3,
+/// and stride (1, 2, 2) even kernels with explicit asymmetric padding and output_padding-style
+/// larger outputs.
+#[test]
+fn fast_backward_input_by_phase() {
+    check_fast(conv2d([1, 1], [2, 2], Padding::Same), 70);
+    check_fast(conv2d([2, 3], [2, 3], Padding::explicit_2d([3, 1], [0, 2])), 71);
+    check_fast(transposed2d([4, 4], [2, 2], Padding::explicit_2d([1, 2], [2, 1]), Some([1, 8, 10])), 72);
+    check_fast(transposed3d([2, 4, 4], [1, 2, 2], explicit([0, 2, 1], [1, 1, 2]), Some([3, 8, 10])), 73);
+}
+
+/// The tiled kernels at channel counts that are not multiples of their tile (inputs padded to
+/// 4, outputs to 16 with zeros; the texture family's 4- and 8-channel tiles): 1, 2, 3, 4, 5 in
+/// and 1, 3, 5, 7, 8, 20 out, conv and transposed, including the first layer's shapes (3D, 1 or
+/// 4 input channels to 8 or 20, 5^3 stride 2: the texture family's direct kernels) and the 1-
+/// and 3-channel heads.
+#[test]
+fn fast_small_channel_counts_forward_and_gradients() {
+    let with = |c: Case, ci: usize, co: usize| Case { ci, co, ..c };
+    check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 1, 3), 60);
+    check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 1, 8), 58);
+    check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 4, 7), 59);
+    // 20 out: three groups of 8 output channels in the direct kernels, over two of 16.
+    check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 1, 20), 57);
+    check_fast(with(conv3d([3, 3, 3], [2, 1, 1], Padding::Same), 2, 1), 61);
+    check_fast(with(conv3d([3, 2, 3], [1, 2, 1], explicit([1, 0, 2], [0, 1, 1])), 5, 5), 62);
+    check_fast(with(conv2d([3, 3], [1, 1], Padding::Same), 3, 1), 63);
+    check_fast(with(conv2d([3, 3], [1, 1], Padding::Same), 5, 3), 64);
+    check_fast(with(conv2d([4, 3], [2, 1], Padding::explicit_2d([2, 0], [1, 1])), 1, 5), 65);
+    check_fast(with(transposed2d([4, 4], [2, 2], Padding::Same, None), 2, 3), 66);
+    check_fast(with(transposed2d([3, 3], [2, 2], Padding::explicit_2d([1, 1], [1, 1]), Some([1, 8, 10])), 5, 1), 67);
+    check_fast(with(transposed3d([4, 4, 4], [2, 2, 2], Padding::Same, None), 1, 5), 68);
+    check_fast(with(transposed3d([3, 2, 3], [1, 2, 2], explicit([1, 0, 2], [0, 1, 1]), None), 3, 3), 69);
+}
+
+/// The texture family's direct kernels (`conv_direct_forward`, its `_k5s2` form,
+/// `conv_direct_backward_weight`, its `_k5` form for 5 tap rows), which run the convs the other families fold (few input
+/// channels), forced onto textures:
+/// 20 output channels (three groups of 8 over two of 16) at a width of 7 (the stage's scalar
+/// path); 2 input channels, a 3x7 kernel at stride (1, 2) with explicit padding (two chunks of
+/// 4 W taps) at width 12 (the stage's vec4 path); 3 output channels (dy packed 4 to a texel).
+#[test]
+fn direct_kernels_of_few_input_channels() {
+    let with = |c: Case, ci: usize, co: usize, input: [usize; 3]| Case { ci, co, input, kernel: ConvKernel::Texture, ..c };
+    check(&with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 1, 20, [5, 6, 7]), 97);
+    check(&with(conv2d([3, 7], [1, 2], Padding::explicit_2d([1, 2], [1, 4])), 2, 6, [1, 6, 12]), 98);
+    check(&with(conv3d([3, 3, 3], [2, 1, 1], Padding::Same), 1, 3, [4, 5, 9]), 99);
+    // 5x5 at row stride 2 (`conv_direct_forward_k5s2`): two tiles of output rows (oh 10), two
+    // input channels, a second group of output channels partly filled.
+    check(&with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 2, 9, [3, 19, 11]), 100);
+    // The same at column stride 1, where the fifth W tap falls on every position of a texel.
+    check(&with(conv2d([5, 5], [2, 1], Padding::Same), 1, 5, [1, 17, 9]), 104);
+}
+
+/// The texture family's 4- and 8-channel tiles (`conv_fast_forward_tex4`, its `_rows3` form,
+/// `..._tex8`, `..._backward_weight_tex4`) on heads with enough input channels not to fold
+/// (8 -> 3, 16 -> 1, 12 -> 7, 3x3), forced onto textures: with fewer input channels the direct
+/// kernels run instead.
+#[test]
+fn texture_heads_of_at_most_eight_output_channels() {
+    let with = |c: Case, ci: usize, co: usize, input: [usize; 3]| Case { ci, co, input, kernel: ConvKernel::Texture, ..c };
+    check(&with(conv2d([3, 3], [1, 1], Padding::Same), 8, 3, [1, 5, 9]), 88);
+    check(&with(conv2d([3, 3], [1, 1], Padding::Same), 16, 1, [1, 6, 7]), 89);
+    // Two tiles of output rows (oh 11, 9; 3 channels: `conv_fast_forward_tex4_rows3`, whose 3
+    // tap rows share their input rows; 7: `..._tex8`); and 3 tap rows at row stride 2, which
+    // `..._tex8` runs.
+    check(&with(conv2d([3, 3], [1, 1], Padding::Same), 8, 3, [1, 11, 5]), 101);
+    check(&with(conv2d([3, 3], [1, 1], Padding::Same), 12, 7, [1, 9, 10]), 102);
+    check(&with(conv2d([3, 3], [2, 1], Padding::Same), 8, 6, [1, 13, 5]), 103);
+}
+
+/// Widths that are multiples of 4 (12 and 8, not powers of two), where the texture family
+/// packs its unfolded operands four voxels along W per load (`conv_fast_pack_tex_w4`): the
+/// forward's x and the backward passes' dy (12 wide at stride 1; 4 wide after stride 3), with
+/// channel counts that leave a part-filled quad (5 and 3 in, 7 and 6 out), 2 batch items; and
+/// the first layers' input as the direct kernels stage it, four voxels along W per vec4 load.
+#[test]
+fn fast_widths_a_multiple_of_four() {
+    let with = |c: Case, ci: usize, co: usize, input: [usize; 3]| Case { ci, co, input, ..c };
+    check_fast(with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 5, 7, [3, 5, 12]), 90);
+    check_fast(with(conv2d([3, 3], [1, 1], Padding::Same), 3, 6, [1, 6, 8]), 91);
+    check_fast(with(conv2d([3, 3], [1, 3], Padding::Same), 6, 5, [1, 3, 12]), 92);
+    // First layers (`conv_direct_*` on the input staged by `conv_direct_stage_w4`), which the
+    // other families fold: 5^3 stride 2 folding H and W, 1 and 4 input channels; 3^3 on 1
+    // channel folding W only;
+    // 5x5 on a 4-wide grid, whose windows run off both sides.
+    check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 1, 8, [5, 6, 12]), 93);
+    check_fast(with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 4, 7, [3, 7, 8]), 94);
+    check_fast(with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 1, 5, [3, 5, 8]), 95);
+    check_fast(with(conv2d([5, 5], [1, 1], Padding::Same), 1, 3, [1, 5, 4]), 96);
+}
+
+/// The texture family's packings through uniform windows (src/gpu/window.rs; on CPU adapters,
+/// widths a multiple of 4) against the reference kernels, all three passes, and the number of
+/// forward dispatches that shows the windows ran (elsewhere: one packing, one weight packing,
+/// the conv). Cases: a 1x1 conv (never folded) on 2 items of 5 channels (a quad with one real
+/// channel) over planes of 2048 vec4s, packed per item and quad (4 dispatches), dy's 5 channels
+/// padded to 16 for the weight gradient (two quads of none); planes of 4097 vec4s, so channel 1 starts
+/// one vec4 past a binding alignment of 32 bytes and the chunks take 4095 rows, not 4096 (2
+/// dispatches); the first layer's input staged for the direct kernels, 26384 vec4s in two
+/// dispatches of four windows, the second's third window moved back to end at the tensor's end
+/// (its fourth binds it again). Tolerances as in `fast_matches_reference_on_random_shapes`
+/// (sums of at most 2 * 9 * 49 * 16 products here).
+#[test]
+fn packing_through_uniform_windows() {
+    let with = |c: Case, n: usize, ci: usize, co: usize, input: [usize; 3]| Case { n, ci, co, input, kernel: ConvKernel::Texture, ..c };
+    let cases = [
+        (with(conv2d([1, 1], [1, 1], Padding::Same), 2, 5, 5, [1, 64, 128]), 4),
+        (with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 1, 4, 3, [17, 241, 4]), 2),
+        (with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 2, 1, 8, [17, 97, 32]), 2),
+    ];
+    for (seed, (c, windows)) in (300u64..).zip(cases) {
+        let slow = passes(&c, ConvKernel::Reference, seed);
+        let fast = passes(&c, ConvKernel::Texture, seed);
+        for (k, what) in ["forward", "dx", "dw"].iter().enumerate() {
+            assert_close(&format!("{c:?} {what}"), &fast[k], &slow[k], 1e-3, 1e-4);
+        }
+        let g = geom(&c);
+        let (tx, tw, ty) = (zeros(&shape(c.d2, c.n, c.ci, g.input)), zeros(&w_shape(&c)), zeros(&shape(c.d2, c.n, c.co, g.output)));
+        let Op::Conv(op) = c.op else { unreachable!() };
+        let before = gpu().dispatch_count();
+        run(|p| op.forward(ConvKernel::Texture, gpu(), p, &tx, &tw, None, &ty));
+        let want = if gpu().info.device_type == wgpu::DeviceType::Cpu { windows + 2 } else { 3 };
+        assert_eq!(gpu().dispatch_count() - before, want, "forward dispatches of {c:?}");
+    }
+}
+
+/// The texture family's weight packing through uniform windows (`conv_fast_pack_weights_tex_window`,
+/// CPU adapters) against the reference kernels, all three passes: weights of two windows read
+/// flipped for a stride-2 backward input (four phases' sub-kernels); weights of less than one
+/// window that are a view into a larger buffer (as in the flat parameter buffer; offset 4128
+/// bytes), at stride (1, 1, 2); weights of four windows, the
+/// last moved back to end at the buffer's end. Tolerances as in
+/// `fast_matches_reference_on_random_shapes`.
+#[test]
+fn weight_packing_through_uniform_windows() {
+    let with = |c: Case, ci: usize, co: usize, input: [usize; 3]| Case { n: 1, ci, co, input, kernel: ConvKernel::Texture, ..c };
+    let cases = [
+        (with(conv2d([3, 3], [2, 2], Padding::Same), 64, 40, [1, 7, 9]), None),
+        (with(conv3d([3, 3, 3], [1, 1, 2], Padding::Same), 12, 20, [3, 5, 6]), Some(1032)),
+        (with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 40, 48, [3, 4, 5]), None),
+    ];
+    for (seed, (c, w_at)) in (320u64..).zip(cases) {
+        let slow = passes_with(&c, ConvKernel::Reference, seed, w_at);
+        let fast = passes_with(&c, ConvKernel::Texture, seed, w_at);
+        for (k, what) in ["forward", "dx", "dw"].iter().enumerate() {
+            assert_close(&format!("{c:?} weights at {w_at:?}: {what}"), &fast[k], &slow[k], 1e-3, 1e-4);
+        }
+    }
+}
+
+/// Runs all three passes of `c` with `kernel` on fixed random inputs; returns (y, dx, dw).
+fn passes(c: &Case, kernel: ConvKernel, seed: u64) -> [Vec<f64>; 3] {
+    passes_with(c, kernel, seed, None)
+}
+
+/// [`passes`] with the weights, where `w_at` says so, a view at that value offset of a buffer
+/// 16384 values longer than they need.
+fn passes_with(c: &Case, kernel: ConvKernel, seed: u64, w_at: Option<usize>) -> [Vec<f64>; 3] {
+    let g = geom(c);
+    let (xs, ws, ys) = (shape(c.d2, c.n, c.ci, g.input), w_shape(c), shape(c.d2, c.n, c.co, g.output));
+    let numel = |s: &[usize]| s.iter().product::<usize>();
+    let mut rng = Rng(seed);
+    let (x, w) = (rng.vec(numel(&xs), -1.0, 1.0), rng.vec(numel(&ws), -1.0, 1.0));
+    let (b, r) = (rng.vec(c.co, -1.0, 1.0), rng.vec(numel(&ys), -1.0, 1.0));
+    let tw = match w_at {
+        None => upload(&ws, &w),
+        Some(at) => {
+            let big = zeros(&[at + w.len() + 16384]);
+            let t = rendernet::Tensor::view(big.into_buffer(), at as u64 * 4, &ws).unwrap();
+            t.write(gpu(), &w.iter().map(|&v| v as f32).collect::<Vec<_>>()).unwrap();
+            t
+        }
+    };
+    let (tx, tb, tr) = (upload(&xs, &x), upload(&[c.co], &b), upload(&ys, &r));
+    let (ty, tdx, tdw) = (zeros(&ys), zeros(&xs), zeros(&ws));
+    run(|p| match c.op {
+        Op::Conv(op) => {
+            op.forward(kernel, gpu(), p, &tx, &tw, Some(&tb), &ty)?;
+            op.backward_input(kernel, gpu(), p, &tr, &tw, &tdx)?;
+            op.backward_weight(kernel, gpu(), p, &tx, &tr, &tdw)
+        }
+        Op::Transposed(op) => {
+            op.forward(kernel, gpu(), p, &tx, &tw, Some(&tb), &ty)?;
+            op.backward_input(kernel, gpu(), p, &tr, &tw, &tdx)?;
+            op.backward_weight(kernel, gpu(), p, &tx, &tr, &tdw)
+        }
+    });
+    [download(&ty), download(&tdx), download(&tdw)]
+}
+
+/// The tiled kernels against the reference kernels on random shapes with channel counts that
+/// are not multiples of the tiles (4 input channels, 16 output channels, 8 positions) and
+/// spatial sizes not multiples of 8. Sums here reach Cin*k^3 <= 20*27 (forward, dx) and
+/// N*|out| <= 2*900 (dw) products of values in [-1, 1]; both kernels' f32 errors are then
+/// ~sqrt(1800)*6e-8*|terms| < 1e-4 apart, so atol 1e-3 + rtol 1e-4 still catches any
+/// dropped term (>= 1e-2 for uniform data).
+#[test]
+fn fast_matches_reference_on_random_shapes() {
+    for seed in 200..210u64 {
+        let mut rng = Rng(seed);
+        let mut pick = |lo: usize, hi: usize| lo + (rng.next_u64() % (hi - lo + 1) as u64) as usize;
+        let d2 = seed % 2 == 1;
+        let mut kernel = [pick(1, 3), pick(1, 4), pick(1, 4)];
+        let mut stride = [pick(1, 3), pick(1, 2), pick(1, 3)];
+        let mut input = [pick(3, 6), pick(3, 9), pick(5, 19)];
+        // Explicit padding up to k + 1 before (more than the kernel: negative phase padding);
+        // inputs of at least k + 2 keep both the conv's and the transposed conv's output
+        // non-empty.
+        let (mut before, mut after) = ([0; 3], [0; 3]);
+        for a in 0..3 {
+            before[a] = pick(0, kernel[a] + 1);
+            after[a] = pick(0, kernel[a] - 1);
+            input[a] = input[a].max(kernel[a] + 2);
+        }
+        if d2 {
+            (kernel[0], stride[0], input[0], before[0], after[0]) = (1, 1, 1, 0, 0);
+        }
+        // Every third case at stride 1.
+        if seed % 3 == 0 {
+            stride = [1, 1, 1];
+        }
+        let (n, ci, co) = (pick(1, 2), pick(1, 20), pick(1, 35));
+        let padding = if seed % 3 == 1 { explicit(before, after) } else { Padding::Same };
+        let h = Conv { kernel, stride, padding };
+        let op = if seed % 4 < 2 { Op::Conv(h) } else { Op::Transposed(ConvTranspose { conv: h }) };
+        let c = Case { op, kernel: ConvKernel::Buffers, d2, n, ci, co, input, output: None };
+        let slow = passes(&c, ConvKernel::Reference, seed);
+        for kernel in [ConvKernel::Buffers, ConvKernel::Texture] {
+            let fast = passes(&c, kernel, seed);
+            for (k, what) in ["forward", "dx", "dw"].iter().enumerate() {
+                assert_close(&format!("seed {seed}: {kernel:?} {c:?} {what}"), &fast[k], &slow[k], 1e-3, 1e-4);
+            }
+        }
+    }
+}
+
+/// `Conv::backward` (both gradients in one call) equals `backward_input` then
+/// `backward_weight` exactly on every kernel family, and on textures packs dy once where the
+/// two packings agree (16 or at most 4 output channels: one dispatch fewer) but not where
+/// they differ (8 or 20: dy padded to 8 or 20 channels for dx, 16 or 32 for dw).
+#[test]
+fn backward_in_one_call_equals_the_two_passes_and_packs_dy_once() {
+    let textures = gpu().has_subgroups_of_8() && gpu().reads_rgba32f_storage();
+    for (k, (c, co)) in [
+        (conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 16),
+        (conv2d([3, 3], [1, 1], Padding::Same), 3),
+        (conv3d([3, 3, 3], [2, 1, 2], Padding::Same), 16),
+        (conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 8),
+        (conv2d([4, 3], [2, 1], Padding::explicit_2d([2, 0], [1, 1])), 20),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let Op::Conv(op) = c.op else { unreachable!() };
+        let c = Case { co, ..c };
+        let g = geom(&c);
+        let (xs, ws, ys) = (shape(c.d2, c.n, c.ci, g.input), w_shape(&c), shape(c.d2, c.n, c.co, g.output));
+        let mut rng = Rng(300 + k as u64);
+        let mut up = |s: &[usize]| upload(s, &rng.vec(s.iter().product(), -1.0, 1.0));
+        let (tx, tw, tdy) = (up(&xs), up(&ws), up(&ys));
+        for kernel in [ConvKernel::Reference, ConvKernel::Buffers, ConvKernel::Texture] {
+            let (dx1, dw1, dx2, dw2) = (zeros(&xs), zeros(&ws), zeros(&xs), zeros(&ws));
+            let d0 = gpu().dispatch_count();
+            run(|p| {
+                op.backward_input(kernel, gpu(), p, &tdy, &tw, &dx1)?;
+                op.backward_weight(kernel, gpu(), p, &tx, &tdy, &dw1)
+            });
+            let d1 = gpu().dispatch_count();
+            run(|p| op.backward(kernel, gpu(), p, &tx, &tw, &tdy, Some(&dx2), Some(&dw2)));
+            let d2 = gpu().dispatch_count();
+            let what = format!("{kernel:?} {co} channels {:?}", op);
+            assert_eq!(download(&dx2), download(&dx1), "dx, {what}");
+            assert_eq!(download(&dw2), download(&dw1), "dw, {what}");
+            let shared = textures && kernel == ConvKernel::Texture && (co == 16 || co <= 4);
+            assert_eq!(d2 - d1, d1 - d0 - shared as u64, "dispatches, {what}");
+        }
+        // Either gradient alone.
+        let (dx, dw) = (zeros(&xs), zeros(&ws));
+        run(|p| op.backward(ConvKernel::Texture, gpu(), p, &tx, &tw, &tdy, Some(&dx), None));
+        run(|p| op.backward(ConvKernel::Texture, gpu(), p, &tx, &tw, &tdy, None, Some(&dw)));
+        let (dx1, dw1) = (zeros(&xs), zeros(&ws));
+        run(|p| op.backward_input(ConvKernel::Texture, gpu(), p, &tdy, &tw, &dx1));
+        run(|p| op.backward_weight(ConvKernel::Texture, gpu(), p, &tx, &tdy, &dw1));
+        assert_eq!((download(&dx), download(&dw)), (download(&dx1), download(&dw1)), "one gradient at a time, {co} channels");
+    }
+}
