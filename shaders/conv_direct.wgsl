@@ -211,12 +211,12 @@ fn tile_sum(v: vec4<f32>) -> vec4<f32> {
 }
 
 // Column of a weight-gradient tile: (kd, c, kh, first W tap, group of 8 output channels), of
-// `nkh` tap rows a column (p.kh, or 1 where a tile takes every tap row: kh = 0).
+// `nkh` tap rows and `nkw` chunks of 4 W taps (p.kh and ceil(p.kw / 4), or 1 where a tile
+// takes every tap row or every W tap: kh = 0, kw0 = 0).
 struct DirectColumn { kd: u32, c: u32, kh: u32, kw0: u32, g: u32 }
 
-fn direct_column(col: u32, nkh: u32) -> DirectColumn {
+fn direct_column(col: u32, nkh: u32, nkw: u32) -> DirectColumn {
     let groups = (p.co + 7u) / 8u;
-    let nkw = (p.kw + 3u) / 4u;
     var r = col;
     let g = r % groups; r /= groups;
     let kw0 = (r % nkw) * 4u; r /= nkw;
@@ -267,7 +267,7 @@ fn conv_direct_backward_weight(ids: LaneIds) {
     if (tl.x >= p.total) { return; }
     let lane = tl.y;
     let cols = p.kd * p.ci * p.kh * ((p.kw + 3u) / 4u) * ((p.co + 7u) / 8u);
-    let k = direct_column(tl.x % cols, p.kh);
+    let k = direct_column(tl.x % cols, p.kh, (p.kw + 3u) / 4u);
     let chunk = tl.x / cols;
     let span = chunk_rows(chunk);
     var acc: Acc32;
@@ -293,19 +293,41 @@ fn conv_direct_backward_weight(ids: LaneIds) {
     put_direct_dw(acc, k, k.kh, chunk, lane);
 }
 
-// The same for 5 tap rows (the first layer's 5^3), a tile taking all 5: each dy pair fetched
-// feeds 5 tap rows' windows (12 texel fetches for 5 x 32 multiply-adds instead of 20), and the
-// tap rows off the grid read zeros from taps4 instead of being skipped.
+// Tap row kh's fifth W tap: sums its accumulators (x.x times dy) over the tile's lanes; lanes 0
+// and 1 write output channels g * 8..+3 and g * 8 + 4..+7 of tap (kd, kh, 4) to part[chunk].
+fn put_direct_dw_tap4(b: Acc8, k: DirectColumn, kh: u32, chunk: u32, lane: u32) {
+    let lo = tile_sum(b.a0);
+    let hi = tile_sum(b.a1);
+    if (lane >= 2u) { return; }
+    let v = select(lo, hi, lane == 1u);
+    let tap = (k.kd * p.kh + kh) * p.kw + 4u;
+    let o = ((chunk * p.kd * p.kh * p.kw + tap) * p.cpad + k.c) * (p.co16 * 16u) + k.g * 8u + 4u * lane;
+    bpart[o] = v.x;
+    bpart[o + 1u] = v.y;
+    bpart[o + 2u] = v.z;
+    bpart[o + 3u] = v.w;
+}
+
+// x (in .x) times the 8 channels of dy.
+fn bw_tap1_step(b: Acc8, x: vec4<f32>, d: DyPair) -> Acc8 {
+    return Acc8(b.a0 + x.x * d.lo, b.a1 + x.x * d.hi);
+}
+
+// The same for 5 x 5 taps (H x W: the first layer's 5^3), a tile taking them all: each dy pair
+// fetched feeds 5 tap rows' windows of 4 W taps and their fifth taps alone (17 texel fetches
+// for 200 multiply-adds, against 40 fetches for 320, 120 of them on zero-weight taps), and
+// the tap rows off the grid read zeros from taps4 and tap1 instead of being skipped.
 @compute @workgroup_size(64)
 fn conv_direct_backward_weight_k5(ids: LaneIds) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
     let lane = tl.y;
-    let cols = p.kd * p.ci * ((p.kw + 3u) / 4u) * ((p.co + 7u) / 8u);
-    let k = direct_column(tl.x % cols, 1u);
+    let cols = p.kd * p.ci * ((p.co + 7u) / 8u);
+    let k = direct_column(tl.x % cols, 1u, 1u);
     let chunk = tl.x / cols;
     let span = chunk_rows(chunk);
     var a0: Acc32; var a1: Acc32; var a2: Acc32; var a3: Acc32; var a4: Acc32;
+    var b0: Acc8; var b1: Acc8; var b2: Acc8; var b3: Acc8; var b4: Acc8;
     var oh = span.x % p.oh;
     var od = (span.x / p.oh) % p.od;
     var n = span.x / (p.oh * p.od);
@@ -316,12 +338,17 @@ fn conv_direct_backward_weight_k5(ids: LaneIds) {
             for (var ow0 = 0u; ow0 < p.ow; ow0 += 8u) {
                 let ow = ow0 + lane;
                 let d = dy_pair(k.g, n, od, oh, ow);
-                let ws = i32(ow * p.sw + k.kw0) - i32(p.pw);
+                let ws = i32(ow * p.sw) - i32(p.pw);
                 a0 = bw_direct_step(a0, taps4(n, k.c, zd, zh, ws), d.lo, d.hi);
                 a1 = bw_direct_step(a1, taps4(n, k.c, zd, zh + 1, ws), d.lo, d.hi);
                 a2 = bw_direct_step(a2, taps4(n, k.c, zd, zh + 2, ws), d.lo, d.hi);
                 a3 = bw_direct_step(a3, taps4(n, k.c, zd, zh + 3, ws), d.lo, d.hi);
                 a4 = bw_direct_step(a4, taps4(n, k.c, zd, zh + 4, ws), d.lo, d.hi);
+                b0 = bw_tap1_step(b0, tap1(n, k.c, zd, zh, ws + 4), d);
+                b1 = bw_tap1_step(b1, tap1(n, k.c, zd, zh + 1, ws + 4), d);
+                b2 = bw_tap1_step(b2, tap1(n, k.c, zd, zh + 2, ws + 4), d);
+                b3 = bw_tap1_step(b3, tap1(n, k.c, zd, zh + 3, ws + 4), d);
+                b4 = bw_tap1_step(b4, tap1(n, k.c, zd, zh + 4, ws + 4), d);
             }
         }
         oh += 1u;
@@ -333,4 +360,9 @@ fn conv_direct_backward_weight_k5(ids: LaneIds) {
     put_direct_dw(a2, k, 2u, chunk, lane);
     put_direct_dw(a3, k, 3u, chunk, lane);
     put_direct_dw(a4, k, 4u, chunk, lane);
+    put_direct_dw_tap4(b0, k, 0u, chunk, lane);
+    put_direct_dw_tap4(b1, k, 1u, chunk, lane);
+    put_direct_dw_tap4(b2, k, 2u, chunk, lane);
+    put_direct_dw_tap4(b3, k, 3u, chunk, lane);
+    put_direct_dw_tap4(b4, k, 4u, chunk, lane);
 }

@@ -73,7 +73,7 @@ fn fast_small_channel_counts_forward_and_gradients() {
 }
 
 /// The texture family's direct kernels (`conv_direct_forward`, its `_k5s2` form,
-/// `conv_direct_backward_weight`, its `_k5` form for 5 tap rows), which run the convs the
+/// `conv_direct_backward_weight`, its `_k5` form for 5 x 5 taps), which run the convs the
 /// other families fold (few input channels), forced onto textures: 20 output channels (three groups of 8 over two of 16) at a width of 7 (the stage's scalar
 /// path); 2 input channels, a 3x7 kernel at stride (1, 2) with explicit padding (two chunks of
 /// 4 W taps) at width 12 (the stage's vec4 path); 3 output channels (dy packed 4 to a texel).

@@ -436,10 +436,10 @@ fn backward_weight_direct(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geome
     let cpad = g.ci.div_ceil(4) * 4;
     let p = params(g, cpad);
     let stage = stage_x(gpu, pass, g, x, &p)?;
-    // 5 tap rows (the first layer): `_k5` tiles take all 5, sharing each dy fetch.
-    let k5 = g.kernel[1] == 5;
-    let (entry, nkh) = if k5 { ("conv_direct_backward_weight_k5", 1) } else { ("conv_direct_backward_weight", g.kernel[1]) };
-    let cols = g.kernel[0] * g.ci * nkh * g.kernel[2].div_ceil(4) * g.co.div_ceil(8);
+    // 5 x 5 taps (the first layer): `_k5` tiles take them all, sharing each dy fetch.
+    let k5 = g.kernel[1] == 5 && g.kernel[2] == 5;
+    let (entry, nkh, nkw) = if k5 { ("conv_direct_backward_weight_k5", 1, 1) } else { ("conv_direct_backward_weight", g.kernel[1], g.kernel[2].div_ceil(4)) };
+    let cols = g.kernel[0] * g.ci * nkh * nkw * g.co.div_ceil(8);
     // Chunks of output rows: ~256 tiles (32 workgroups), never more chunks than rows.
     let rows = g.n * g.output[0] * g.output[1];
     let chunk = rows.div_ceil(256usize.div_ceil(cols).clamp(1, rows));
