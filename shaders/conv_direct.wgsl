@@ -9,7 +9,8 @@
 // fetched one texel a lane and broadcast by subgroup shuffles, over the texture family's tiles (a
 // subgroup of 8 lanes = 8 outputs along W, 8 rows each) per group of 8 output channels; the weight
 // gradient multiplies them by the lane's own dy. Compiled appended to conv_fast.wgsl and
-// conv_tex.wgsl (their Params, lane_tile, Acc8, mac8, bias4, put_raw, chunk_rows and bindings).
+// conv_tex.wgsl (their Params, bindings, bias4, put_raw, chunk_rows, and the forward tiles'
+// lane_tile, tap_depth, Rows, slide, Acc8, Tile8, tile8, mac_rows8, broadcast8, put_tile8).
 
 // ---- the stage: the input, 4 voxels along W a texel ----------------------------------------
 // Stage texel (j, h, (n * ci + c) * id + d) holds x[n, c, d, h, 4j..4j+3] (zero past iw): the
