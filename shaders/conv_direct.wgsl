@@ -230,8 +230,7 @@ fn direct_column(col: u32, nkh: u32, nkw: u32) -> DirectColumn {
 struct DyPair { lo: vec4<f32>, hi: vec4<f32> }
 
 fn dy_pair(g: u32, n: u32, od: u32, oh: u32, ow: u32) -> DyPair {
-    // dy texels per voxel: 1 for the 4-channel packing, else co16 * 4.
-    let dq = select(p.co16 * 4u, 1u, p.co <= 4u);
+    let dq = dy_quads();
     let q1 = min(2u * g + 1u, dq - 1u);
     let ok = ow < p.ow;
     let dc = vec2<i32>(i32(min(ow, p.ow - 1u)), i32(oh));

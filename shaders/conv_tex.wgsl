@@ -520,6 +520,12 @@ fn conv_fast_forward_tex4_rows3(ids: LaneIds) {
 @group(0) @binding(2) var bdy: texture_storage_3d<rgba32float, read>;   // packed dy: quads co16 * 4 per item
 @group(0) @binding(3) var<storage, read_write> bpart: array<f32>;
 
+// dy texels per voxel as src/ops/conv_fast.rs (dy_tex_channels) packs dy for the weight
+// gradients: one or two quads for at most 4 or 8 output channels, else co16 * 4.
+fn dy_quads() -> u32 {
+    return select(p.co16 * 4u, (p.co + 3u) / 4u, p.co <= 8u);
+}
+
 struct Acc16 { a: array<vec4<f32>, 16> }
 
 // acc[o] += dy[o] * x for the 16 output channels of the position held by lane `j` of the
@@ -570,7 +576,7 @@ fn conv_fast_backward_weight_tex(ids: LaneIds) {
     let k = tap_axes(tap);
     let kw = k.z;
     let span = chunk_rows(chunk);
-    let dq = p.co16 * 4u;   // dy texels per voxel
+    let dq = dy_quads();
     var acc: Acc16;
     for (var row = span.x; row < span.y; row++) {
         let at = row_at(row, k);
@@ -666,6 +672,70 @@ fn conv_fast_backward_weight_tex4(ids: LaneIds) {
     let a = array<vec4<f32>, 4>(acc.a0, acc.a1, acc.a2, acc.a3);
     for (var c = 0u; c < 4u; c++) {
         let v = a[c];
+        bpart[o + c] = v.x;
+        bpart[o + 16u + c] = v.y;
+        bpart[o + 32u + c] = v.z;
+        bpart[o + 48u + c] = v.w;
+    }
+}
+
+// ---- backward weight, half width (5-8 output channels): two dy texels per position --------
+// dy packed with 8 channels (two quads per voxel: the packing backward_input reads, so one
+// packing serves both gradients), where the 16-channel kernel above would multiply 8-11 zero
+// channels of 16; each lane accumulates dw[8 channels][4 channels] of its (tap, quad) pair;
+// part keeps the 16-column layout (columns 0..7 written).
+struct BwAcc8 { a: array<vec4<f32>, 8> }
+
+fn bw_step8(acc: BwAcc8, x: vec4<f32>, g0: vec4<f32>, g1: vec4<f32>, j: u32) -> BwAcc8 {
+    let d0 = subgroupShuffle(g0, j); let d1 = subgroupShuffle(g1, j);
+    var r = acc;
+    r.a[0] += d0.x * x; r.a[1] += d0.y * x; r.a[2] += d0.z * x; r.a[3] += d0.w * x;
+    r.a[4] += d1.x * x; r.a[5] += d1.y * x; r.a[6] += d1.z * x; r.a[7] += d1.w * x;
+    return r;
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_backward_weight_tex8(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    let t = tl.x;
+    if (t >= p.total) { return; }
+    let lane = tl.y;
+    let base = tl.z;
+    let taps = p.kd * p.kh * p.kw;
+    // co16 = 1: channel group 0.
+    let bp = bw_pair(t, lane);
+    let chunk = bp.chunk; let tap = bp.tap; let q = bp.q;
+    let k = tap_axes(tap);
+    let span = chunk_rows(chunk);
+    var acc: BwAcc8;
+    for (var row = span.x; row < span.y; row++) {
+        let at = row_at(row, k);
+        let n = at.n;
+        let zd = at.zd;
+        let zh = at.zh;
+        for (var ow0 = 0u; ow0 < p.ow; ow0 += 8u) {
+            // Lane l fetches the two dy texels at ow0 + l (zero past the row's end).
+            let mine = ow0 + lane;
+            let ok = mine < p.ow;
+            let dc = vec3<i32>(i32(min(mine, p.ow - 1u)), i32(at.oh), i32(2u * n * p.od + at.od));
+            let g0 = select(vec4<f32>(0.0), textureLoad(bdy, dc), ok);
+            let g1 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, i32(p.od))), ok);
+            let zw = i32(ow0 * p.sw + k.z) - i32(p.pw);
+            let s = i32(p.sw);
+            acc = bw_step8(acc, bw_x(n, q, zd, zh, zw), g0, g1, base);
+            acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + s), g0, g1, base + 1u);
+            acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 2 * s), g0, g1, base + 2u);
+            acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 3 * s), g0, g1, base + 3u);
+            acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 4 * s), g0, g1, base + 4u);
+            acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 5 * s), g0, g1, base + 5u);
+            acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 6 * s), g0, g1, base + 6u);
+            acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 7 * s), g0, g1, base + 7u);
+        }
+    }
+    if (bp.pair >= taps * (p.cpad / 4u)) { return; }
+    let o = ((chunk * taps + tap) * p.cpad + 4u * q) * 16u;
+    for (var c = 0u; c < 8u; c++) {
+        let v = acc.a[c];
         bpart[o + c] = v.x;
         bpart[o + 16u + c] = v.y;
         bpart[o + 32u + c] = v.z;

@@ -158,10 +158,12 @@ fn cases(gpu: &Gpu, choice: &str) -> Result<Vec<Case>> {
     let t = ConvTranspose::conv2d([4, 4], [2, 2], Padding::Same);
     v.extend(transposed_cases(gpu, "64->32 4x4 s2 on 64x64, batch 1", t, &[1, 64, 64, 64], &[64, 32, 4, 4], choice)?);
     v.extend(projection_cases(gpu, choice)?);
-    // The small-channel ends of the tiny preset: its first layer and an image head.
+    // The small-channel ends of the tiny preset: its first layer, an image head and the
+    // Phong heads as one conv (normal 3 + albedo 1 + mask 1 channels, `nn::rendernet`).
     let c5 = Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same);
     v.extend(conv_cases(gpu, "conv3d", "1->8 5^3 s2 on 64^3, batch 1", c5, &[1, 1, 64, 64, 64], &[8, 1, 5, 5, 5], choice)?);
     v.extend(conv_cases(gpu, "conv2d", "16->3 3x3 on 128x128, batch 1", c2, &[1, 16, 128, 128], &[3, 16, 3, 3], choice)?);
+    v.extend(conv_cases(gpu, "conv2d", "16->5 3x3 on 128x128, batch 1", c2, &[1, 16, 128, 128], &[5, 16, 3, 3], choice)?);
     Ok(v)
 }
 

@@ -286,8 +286,8 @@ fn dy_packing(gpu: &Gpu, g: &Geometry, ops: Operands) -> (Geometry, usize, bool)
 }
 
 /// Both gradients of one conv, `dx = conv^T(dy, w)` and `dw`, packing dy once where the two
-/// would pack it alike (on textures, with 4 or fewer or a multiple of 16 output channels: the
-/// 16-channel convs and the heads of the RenderNet presets): one dispatch and one pass over
+/// would pack it alike (on textures, with at most 8 or a multiple of 16 output channels: the
+/// 16-channel convs, the first layer and the heads of the RenderNet presets): one dispatch and one pass over
 /// dy fewer than [`backward_input`] then [`backward_weight`], which it equals exactly.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn backward(
@@ -376,9 +376,11 @@ fn pack_dy_tex(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, dy: &T
     pack_x(gpu, pass, &dy_geom, &Folded::none(dy_geom), dy, dy_tex_channels(g), true)
 }
 
-/// Channels of dy as packed for the texture weight gradient (part keeps `copad`).
+/// Channels of dy as packed for the texture weight gradient (part keeps `copad`): 4 or 8
+/// for the narrow kernels, which then share the packing of [`backward_input`] (`backward`),
+/// else whole groups of 16. The shaders' `dy_quads` reads it back.
 fn dy_tex_channels(g: &Geometry) -> usize {
-    if g.co <= 4 { 4 } else { g.co.div_ceil(16) * 16 }
+    if g.co <= 8 { g.co.div_ceil(4) * 4 } else { g.co.div_ceil(16) * 16 }
 }
 
 /// Whether `backward_weight` of `g` runs on textures for `ops`, with the fold and packed
@@ -386,10 +388,9 @@ fn dy_tex_channels(g: &Geometry) -> usize {
 fn weight_textures(gpu: &Gpu, g: &Geometry, ops: Operands) -> Option<(Folded, usize, usize)> {
     let f = fold(g, 4);
     let cpad = f.g.ci.div_ceil(4) * 4;
-    let copad = g.co.div_ceil(16) * 16;
     // Two activation textures (x folded or staged, dy) and no weight texture.
     let x_fits = if f.fold() > 1 { direct_fits(gpu, ops, g, &f) } else { x_texture_fits(gpu, g.n, cpad, f.g.input) };
-    let fits = textures_wanted(gpu, ops) && x_fits && x_texture_fits(gpu, g.n, copad, g.output);
+    let fits = textures_wanted(gpu, ops) && x_fits && x_texture_fits(gpu, g.n, dy_tex_channels(g), g.output);
     fits.then(|| (f, cpad, dy_tex_channels(g)))
 }
 
@@ -410,7 +411,6 @@ fn backward_weight_tex(
         return backward_weight_direct(gpu, pass, g, x, dyp, dw);
     }
     let xp = pack_x(gpu, pass, g, f, x, cpad, true)?;
-    let narrow = g.co <= 4;
     let copad = g.co.div_ceil(16) * 16;
     let g = &f.g;
     let taps = volume(g.kernel);
@@ -425,7 +425,12 @@ fn backward_weight_tex(
     let tiles = nchunks * groups;
     let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, total: tiles as u32, ..params(g, cpad) };
     let args = [xp.arg(), dyp.arg(), Arg::W(&part)];
-    let entry = if narrow { "conv_fast_backward_weight_tex4" } else { "conv_fast_backward_weight_tex" };
+    // At most 4 or 8 output channels: one or two dy texels a position instead of four.
+    let entry = match g.co {
+        ..=4 => "conv_fast_backward_weight_tex4",
+        5..=8 => "conv_fast_backward_weight_tex8",
+        _ => "conv_fast_backward_weight_tex",
+    };
     gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
     dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
 }
