@@ -253,6 +253,41 @@ fn tile_pos(t: FwdTile) -> u32 {
     return p.yoff + t.od * p.ysd + t.oh0 * p.ysh + t.ow * p.ysw;
 }
 
+// A forward tile's taps as one loop over the weight texture's rows (y = tap * cq + q, in the
+// order (kd, kh, kw, q)), the tap's axes kept as counters (`next_tap`): lavapipe copies every
+// loop-carried value through the lane mask at each loop's entry and exit as well as at each
+// iteration, so four nested loops cost the tile's accumulators 1.5-3 such copies per weight
+// row (cq = 4 to 1) where one loop costs one. Depth taps off the grid are left out by the
+// loop's bounds: rows y0..y1 hold the depth taps kd0.. that land on the grid, d0 is the input
+// depth of tap 0.
+struct Taps { y0: u32, y1: u32, kd0: u32, d0: i32 }
+struct Tap { kd: u32, kh: u32, kw: u32, q: u32 }
+
+// `rows` weight rows per depth tap.
+fn tile_taps(od: u32, rows: u32) -> Taps {
+    let d0 = i32(od * p.sd) - i32(p.pd);
+    let kd0 = u32(max(-d0, 0));
+    let kd1 = u32(clamp(i32(p.id) - d0, 0, i32(p.kd)));
+    return Taps(kd0 * rows, max(kd0, kd1) * rows, kd0, d0);
+}
+
+// The tap after k over nkh x nkw taps of cq quads (selects, not branches: no copies).
+fn next_tap(k: Tap, nkh: u32, nkw: u32, cq: u32) -> Tap {
+    let wq = k.q + 1u == cq;
+    let kw = k.kw + u32(wq);
+    let ww = kw == nkw;
+    let kh = k.kh + u32(ww);
+    let wh = kh == nkh;
+    return Tap(k.kd + u32(wh), select(kh, 0u, wh), select(kw, 0u, ww), select(k.q + 1u, 0u, wq));
+}
+
+// The 8 input rows of tap k (row stride sh) for tile ft.
+fn tap_rows(ft: FwdTile, t: Taps, k: Tap) -> Rows {
+    let zh = i32(ft.oh0 * p.sh + k.kh) - i32(p.ph);
+    let zw = i32(ft.ow * p.sw + k.kw) - i32(p.pw);
+    return x_rows(ft.n, k.q, u32(t.d0 + i32(k.kd)), zh, i32(p.sh), zw);
+}
+
 // Input depth of tap kd for output depth od, or -1 off the grid.
 fn tap_depth(od: u32, kd: u32) -> i32 {
     let zd = i32(od * p.sd + kd) - i32(p.pd);
@@ -312,20 +347,12 @@ fn conv_fast_forward_tex(ids: LaneIds) {
     if (tl.x >= p.total) { return; }
     let ft = fwd_tile(tl.x, tl.y);
     let cq = p.cpad / 4u;
+    let t = tile_taps(ft.od, p.kh * p.kw * cq);
+    var k = Tap(t.kd0, 0u, 0u, 0u);
     var a = tile16(ft.cg);
-    for (var kd = 0u; kd < p.kd; kd++) {
-        let zd = tap_depth(ft.od, kd);
-        if (zd < 0) { continue; }
-        for (var kh = 0u; kh < p.kh; kh++) {
-            let zh = i32(ft.oh0 * p.sh + kh) - i32(p.ph);
-            for (var kw = 0u; kw < p.kw; kw++) {
-                let zw = i32(ft.ow * p.sw + kw) - i32(p.pw);
-                let tap = (kd * p.kh + kh) * p.kw + kw;
-                for (var q = 0u; q < cq; q++) {
-                    a = mac_rows16(a, x_rows(ft.n, q, u32(zd), zh, i32(p.sh), zw), weights16(ft.cg, tl.y, tl.z, tap * cq + q));
-                }
-            }
-        }
+    for (var y = t.y0; y < t.y1; y++) {
+        a = mac_rows16(a, tap_rows(ft, t, k), weights16(ft.cg, tl.y, tl.z, y));
+        k = next_tap(k, p.kh, p.kw, cq);
     }
     put_tile16(ft, a);
 }
@@ -391,20 +418,12 @@ fn conv_fast_forward_tex8(ids: LaneIds) {
     // co16 = 1: channel group 0.
     let ft = fwd_tile(tl.x, tl.y);
     let cq = p.cpad / 4u;
+    let t = tile_taps(ft.od, p.kh * p.kw * cq);
+    var k = Tap(t.kd0, 0u, 0u, 0u);
     var a = tile8(0u);
-    for (var kd = 0u; kd < p.kd; kd++) {
-        let zd = tap_depth(ft.od, kd);
-        if (zd < 0) { continue; }
-        for (var kh = 0u; kh < p.kh; kh++) {
-            let zh = i32(ft.oh0 * p.sh + kh) - i32(p.ph);
-            for (var kw = 0u; kw < p.kw; kw++) {
-                let zw = i32(ft.ow * p.sw + kw) - i32(p.pw);
-                let tap = (kd * p.kh + kh) * p.kw + kw;
-                for (var q = 0u; q < cq; q++) {
-                    a = mac_rows8(a, x_rows(ft.n, q, u32(zd), zh, i32(p.sh), zw), weights8(tl.y, tl.z, tap * cq + q));
-                }
-            }
-        }
+    for (var y = t.y0; y < t.y1; y++) {
+        a = mac_rows8(a, tap_rows(ft, t, k), weights8(tl.y, tl.z, y));
+        k = next_tap(k, p.kh, p.kw, cq);
     }
     put_tile8(ft, 0u, a);
 }
@@ -461,20 +480,12 @@ fn conv_fast_forward_tex4(ids: LaneIds) {
     // co16 = 1: channel group 0.
     let ft = fwd_tile(tl.x, tl.y);
     let cq = p.cpad / 4u;
+    let t = tile_taps(ft.od, p.kh * p.kw * cq);
+    var k = Tap(t.kd0, 0u, 0u, 0u);
     var a = tile4();
-    for (var kd = 0u; kd < p.kd; kd++) {
-        let zd = tap_depth(ft.od, kd);
-        if (zd < 0) { continue; }
-        for (var kh = 0u; kh < p.kh; kh++) {
-            let zh = i32(ft.oh0 * p.sh + kh) - i32(p.ph);
-            for (var kw = 0u; kw < p.kw; kw++) {
-                let zw = i32(ft.ow * p.sw + kw) - i32(p.pw);
-                let tap = (kd * p.kh + kh) * p.kw + kw;
-                for (var q = 0u; q < cq; q++) {
-                    a = mac_rows4(a, x_rows(ft.n, q, u32(zd), zh, i32(p.sh), zw), weights4(tl.y, tl.z, tap * cq + q));
-                }
-            }
-        }
+    for (var y = t.y0; y < t.y1; y++) {
+        a = mac_rows4(a, tap_rows(ft, t, k), weights4(tl.y, tl.z, y));
+        k = next_tap(k, p.kh, p.kw, cq);
     }
     put_tile4(ft, a);
 }
@@ -486,23 +497,22 @@ fn conv_fast_forward_tex4_rows3(ids: LaneIds) {
     let ft = fwd_tile(tl.x, tl.y);
     let cq = p.cpad / 4u;
     let zh = i32(ft.oh0) - i32(p.ph);
+    // One step per (kd, kw, q); the 3 tap rows within it.
+    let t = tile_taps(ft.od, p.kw * cq);
+    var k = Tap(t.kd0, 0u, 0u, 0u);
     var a = tile4();
-    for (var kd = 0u; kd < p.kd; kd++) {
-        let zd = tap_depth(ft.od, kd);
-        if (zd < 0) { continue; }
-        for (var kw = 0u; kw < p.kw; kw++) {
-            let zw = i32(ft.ow * p.sw + kw) - i32(p.pw);
-            // Weight row of tap (kd, kh = 0, kw); kh = 1, 2 are p.kw taps further on.
-            let y = (kd * 3u * p.kw + kw) * cq;
-            for (var q = 0u; q < cq; q++) {
-                let x = x_rows(ft.n, q, u32(zd), zh, 1, zw);
-                let x1 = slide(x, tex_x(ft.n, q, u32(zd), zh + 8, zw));
-                let x2 = slide(x1, tex_x(ft.n, q, u32(zd), zh + 9, zw));
-                a = mac_rows4(a, x, weights4(tl.y, tl.z, y + q));
-                a = mac_rows4(a, x1, weights4(tl.y, tl.z, y + p.kw * cq + q));
-                a = mac_rows4(a, x2, weights4(tl.y, tl.z, y + 2u * p.kw * cq + q));
-            }
-        }
+    for (var i = t.y0; i < t.y1; i++) {
+        let zd = u32(t.d0 + i32(k.kd));
+        let zw = i32(ft.ow * p.sw + k.kw) - i32(p.pw);
+        // Weight row of tap (kd, kh = 0, kw); kh = 1, 2 are p.kw taps further on.
+        let y = (k.kd * 3u * p.kw + k.kw) * cq + k.q;
+        let x = x_rows(ft.n, k.q, zd, zh, 1, zw);
+        let x1 = slide(x, tex_x(ft.n, k.q, zd, zh + 8, zw));
+        let x2 = slide(x1, tex_x(ft.n, k.q, zd, zh + 9, zw));
+        a = mac_rows4(a, x, weights4(tl.y, tl.z, y));
+        a = mac_rows4(a, x1, weights4(tl.y, tl.z, y + p.kw * cq));
+        a = mac_rows4(a, x2, weights4(tl.y, tl.z, y + 2u * p.kw * cq));
+        k = next_tap(k, 1u, p.kw, cq);
     }
     put_tile4(ft, a);
 }
