@@ -271,24 +271,19 @@ fn conv_direct_backward_weight(ids: LaneIds) {
     let chunk = tl.x / cols;
     let span = chunk_rows(chunk);
     var acc: Acc32;
-    // Row counters (n, od, oh), advanced without dividing.
-    var oh = span.x % p.oh;
-    var od = (span.x / p.oh) % p.od;
-    var n = span.x / (p.oh * p.od);
-    for (var row = span.x; row < span.y; row++) {
+    var w = walk_from(span.x);
+    let steps = walk_steps(span);
+    for (var i = 0u; i < steps; i++) {
+        let n = w.n; let od = w.od; let oh = w.oh; let ow0 = w.ow0;
         let zd = i32(od * p.sd + k.kd) - i32(p.pd);
         let zh = i32(oh * p.sh + k.kh) - i32(p.ph);
         if (zd >= 0 && zd < i32(p.id) && zh >= 0 && zh < i32(p.ih)) {
-            for (var ow0 = 0u; ow0 < p.ow; ow0 += 8u) {
-                let ow = ow0 + lane;
-                let d = dy_pair(k.g, n, od, oh, ow);
-                let x = taps4(n, k.c, zd, zh, i32(ow * p.sw + k.kw0) - i32(p.pw));
-                acc = bw_direct_step(acc, x, d.lo, d.hi);
-            }
+            let ow = ow0 + lane;
+            let d = dy_pair(k.g, n, od, oh, ow);
+            let x = taps4(n, k.c, zd, zh, i32(ow * p.sw + k.kw0) - i32(p.pw));
+            acc = bw_direct_step(acc, x, d.lo, d.hi);
         }
-        oh += 1u;
-        if (oh == p.oh) { oh = 0u; od += 1u; }
-        if (od == p.od) { od = 0u; n += 1u; }
+        w = walk_next(w);
     }
     put_direct_dw(acc, k, k.kh, chunk, lane);
 }
@@ -328,32 +323,28 @@ fn conv_direct_backward_weight_k5(ids: LaneIds) {
     let span = chunk_rows(chunk);
     var a0: Acc32; var a1: Acc32; var a2: Acc32; var a3: Acc32; var a4: Acc32;
     var b0: Acc8; var b1: Acc8; var b2: Acc8; var b3: Acc8; var b4: Acc8;
-    var oh = span.x % p.oh;
-    var od = (span.x / p.oh) % p.od;
-    var n = span.x / (p.oh * p.od);
-    for (var row = span.x; row < span.y; row++) {
+    var w = walk_from(span.x);
+    let steps = walk_steps(span);
+    for (var i = 0u; i < steps; i++) {
+        let n = w.n; let od = w.od; let oh = w.oh; let ow0 = w.ow0;
         let zd = i32(od * p.sd + k.kd) - i32(p.pd);
         let zh = i32(oh * p.sh) - i32(p.ph);
         if (zd >= 0 && zd < i32(p.id)) {
-            for (var ow0 = 0u; ow0 < p.ow; ow0 += 8u) {
-                let ow = ow0 + lane;
-                let d = dy_pair(k.g, n, od, oh, ow);
-                let ws = i32(ow * p.sw) - i32(p.pw);
-                a0 = bw_direct_step(a0, taps4(n, k.c, zd, zh, ws), d.lo, d.hi);
-                a1 = bw_direct_step(a1, taps4(n, k.c, zd, zh + 1, ws), d.lo, d.hi);
-                a2 = bw_direct_step(a2, taps4(n, k.c, zd, zh + 2, ws), d.lo, d.hi);
-                a3 = bw_direct_step(a3, taps4(n, k.c, zd, zh + 3, ws), d.lo, d.hi);
-                a4 = bw_direct_step(a4, taps4(n, k.c, zd, zh + 4, ws), d.lo, d.hi);
-                b0 = bw_tap1_step(b0, tap1(n, k.c, zd, zh, ws + 4), d);
-                b1 = bw_tap1_step(b1, tap1(n, k.c, zd, zh + 1, ws + 4), d);
-                b2 = bw_tap1_step(b2, tap1(n, k.c, zd, zh + 2, ws + 4), d);
-                b3 = bw_tap1_step(b3, tap1(n, k.c, zd, zh + 3, ws + 4), d);
-                b4 = bw_tap1_step(b4, tap1(n, k.c, zd, zh + 4, ws + 4), d);
-            }
+            let ow = ow0 + lane;
+            let d = dy_pair(k.g, n, od, oh, ow);
+            let ws = i32(ow * p.sw) - i32(p.pw);
+            a0 = bw_direct_step(a0, taps4(n, k.c, zd, zh, ws), d.lo, d.hi);
+            a1 = bw_direct_step(a1, taps4(n, k.c, zd, zh + 1, ws), d.lo, d.hi);
+            a2 = bw_direct_step(a2, taps4(n, k.c, zd, zh + 2, ws), d.lo, d.hi);
+            a3 = bw_direct_step(a3, taps4(n, k.c, zd, zh + 3, ws), d.lo, d.hi);
+            a4 = bw_direct_step(a4, taps4(n, k.c, zd, zh + 4, ws), d.lo, d.hi);
+            b0 = bw_tap1_step(b0, tap1(n, k.c, zd, zh, ws + 4), d);
+            b1 = bw_tap1_step(b1, tap1(n, k.c, zd, zh + 1, ws + 4), d);
+            b2 = bw_tap1_step(b2, tap1(n, k.c, zd, zh + 2, ws + 4), d);
+            b3 = bw_tap1_step(b3, tap1(n, k.c, zd, zh + 3, ws + 4), d);
+            b4 = bw_tap1_step(b4, tap1(n, k.c, zd, zh + 4, ws + 4), d);
         }
-        oh += 1u;
-        if (oh == p.oh) { oh = 0u; od += 1u; }
-        if (od == p.od) { od = 0u; n += 1u; }
+        w = walk_next(w);
     }
     put_direct_dw(a0, k, 0u, chunk, lane);
     put_direct_dw(a1, k, 1u, chunk, lane);

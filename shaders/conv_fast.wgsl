@@ -343,6 +343,36 @@ fn chunk_rows(chunk: u32) -> vec2<u32> {
     return vec2<u32>(begin, min(begin + p.chunk, p.n * p.od * p.oh));
 }
 
+// The texture family's weight-gradient tiles take their chunk's positions as one loop of
+// steps of 8 columns: output row (n, od, oh) and first column ow0 advanced without dividing
+// (one loop rather than rows then columns: lavapipe copies every loop-carried accumulator
+// through the lane mask at each loop's entry and exit too; see conv_tex.wgsl, tile_taps).
+struct Walk { n: u32, od: u32, oh: u32, ow0: u32 }
+
+fn walk_from(row: u32) -> Walk {
+    return Walk(row / (p.oh * p.od), (row / p.oh) % p.od, row % p.oh, 0u);
+}
+
+// Steps over the rows of `span` (chunk_rows).
+fn walk_steps(span: vec2<u32>) -> u32 {
+    return (span.y - span.x) * ((p.ow + 7u) / 8u);
+}
+
+fn walk_next(w: Walk) -> Walk {
+    let ow0 = w.ow0 + 8u;
+    let wc = ow0 >= p.ow;
+    let oh = w.oh + u32(wc);
+    let wh = oh == p.oh;
+    let od = w.od + u32(wh);
+    let wd = od == p.od;
+    return Walk(w.n + u32(wd), select(od, 0u, wd), select(oh, 0u, wh), select(ow0, 0u, wc));
+}
+
+// Input depth and row that tap k = (kd, kh, kw) reads from the step's output row.
+fn walk_z(w: Walk, k: vec3<u32>) -> vec2<i32> {
+    return vec2<i32>(i32(w.od * p.sd + k.x) - i32(p.pd), i32(w.oh * p.sh + k.y) - i32(p.ph));
+}
+
 // Output row `row` = (n, od, oh) and the input depth and row that tap `k` = (kd, kh, kw)
 // reads from it (possibly off the grid).
 struct RowAt { n: u32, od: u32, oh: u32, zd: i32, zh: i32 }

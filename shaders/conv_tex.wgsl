@@ -588,35 +588,37 @@ fn conv_fast_backward_weight_tex(ids: LaneIds) {
     let span = chunk_rows(chunk);
     let dq = dy_quads();
     var acc: Acc16;
-    for (var row = span.x; row < span.y; row++) {
-        let at = row_at(row, k);
-        let n = at.n;
-        let oh = at.oh;
-        let zd = at.zd;
-        let zh = at.zh;
-        let dz = i32((n * dq + cg * 4u) * p.od + at.od);
-        for (var ow0 = 0u; ow0 < p.ow; ow0 += 8u) {
-            // Lane l fetches the 16 dy values at ow0 + l (zero past the row's end).
-            let mine = ow0 + lane;
-            let ok = mine < p.ow;
-            let dc = vec3<i32>(i32(min(mine, p.ow - 1u)), i32(oh), dz);
-            let od_ = i32(p.od);
-            let g0 = select(vec4<f32>(0.0), textureLoad(bdy, dc), ok);
-            let g1 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, od_)), ok);
-            let g2 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, 2 * od_)), ok);
-            let g3 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, 3 * od_)), ok);
-            let zw = i32(ow0 * p.sw + kw) - i32(p.pw);
-            let s = i32(p.sw);
-            // Written out: llvmpipe does not unroll loops.
-            acc = bw_step(acc, bw_x(n, q, zd, zh, zw), g0, g1, g2, g3, base);
-            acc = bw_step(acc, bw_x(n, q, zd, zh, zw + s), g0, g1, g2, g3, base + 1u);
-            acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 2 * s), g0, g1, g2, g3, base + 2u);
-            acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 3 * s), g0, g1, g2, g3, base + 3u);
-            acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 4 * s), g0, g1, g2, g3, base + 4u);
-            acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 5 * s), g0, g1, g2, g3, base + 5u);
-            acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 6 * s), g0, g1, g2, g3, base + 6u);
-            acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 7 * s), g0, g1, g2, g3, base + 7u);
-        }
+    var w = walk_from(span.x);
+    let steps = walk_steps(span);
+    for (var i = 0u; i < steps; i++) {
+        let z = walk_z(w, k);
+        let n = w.n;
+        let oh = w.oh;
+        let zd = z.x;
+        let zh = z.y;
+        let ow0 = w.ow0;
+        let dz = i32((n * dq + cg * 4u) * p.od + w.od);
+        // Lane l fetches the 16 dy values at ow0 + l (zero past the row's end).
+        let mine = ow0 + lane;
+        let ok = mine < p.ow;
+        let dc = vec3<i32>(i32(min(mine, p.ow - 1u)), i32(oh), dz);
+        let od_ = i32(p.od);
+        let g0 = select(vec4<f32>(0.0), textureLoad(bdy, dc), ok);
+        let g1 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, od_)), ok);
+        let g2 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, 2 * od_)), ok);
+        let g3 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, 3 * od_)), ok);
+        let zw = i32(ow0 * p.sw + kw) - i32(p.pw);
+        let s = i32(p.sw);
+        // Written out: llvmpipe does not unroll loops.
+        acc = bw_step(acc, bw_x(n, q, zd, zh, zw), g0, g1, g2, g3, base);
+        acc = bw_step(acc, bw_x(n, q, zd, zh, zw + s), g0, g1, g2, g3, base + 1u);
+        acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 2 * s), g0, g1, g2, g3, base + 2u);
+        acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 3 * s), g0, g1, g2, g3, base + 3u);
+        acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 4 * s), g0, g1, g2, g3, base + 4u);
+        acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 5 * s), g0, g1, g2, g3, base + 5u);
+        acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 6 * s), g0, g1, g2, g3, base + 6u);
+        acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 7 * s), g0, g1, g2, g3, base + 7u);
+        w = walk_next(w);
     }
     if (!live) { return; }
     let copad = p.co16 * 16u;
@@ -655,27 +657,29 @@ fn conv_fast_backward_weight_tex4(ids: LaneIds) {
     let k = tap_axes(tap);
     let span = chunk_rows(chunk);
     var acc = Acc4(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
-    for (var row = span.x; row < span.y; row++) {
-        let at = row_at(row, k);
-        let n = at.n;
-        let zd = at.zd;
-        let zh = at.zh;
-        for (var ow0 = 0u; ow0 < p.ow; ow0 += 8u) {
-            // Lane l fetches the dy texel at ow0 + l (zero past the row's end).
-            let mine = ow0 + lane;
-            let dc = vec3<i32>(i32(min(mine, p.ow - 1u)), i32(at.oh), i32(n * p.od + at.od));
-            let g = select(vec4<f32>(0.0), textureLoad(bdy, dc), mine < p.ow);
-            let zw = i32(ow0 * p.sw + k.z) - i32(p.pw);
-            let s = i32(p.sw);
-            acc = bw_step4(acc, bw_x(n, q, zd, zh, zw), g, base);
-            acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + s), g, base + 1u);
-            acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 2 * s), g, base + 2u);
-            acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 3 * s), g, base + 3u);
-            acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 4 * s), g, base + 4u);
-            acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 5 * s), g, base + 5u);
-            acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 6 * s), g, base + 6u);
-            acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 7 * s), g, base + 7u);
-        }
+    var w = walk_from(span.x);
+    let steps = walk_steps(span);
+    for (var i = 0u; i < steps; i++) {
+        let z = walk_z(w, k);
+        let n = w.n;
+        let zd = z.x;
+        let zh = z.y;
+        let ow0 = w.ow0;
+        // Lane l fetches the dy texel at ow0 + l (zero past the row's end).
+        let mine = ow0 + lane;
+        let dc = vec3<i32>(i32(min(mine, p.ow - 1u)), i32(w.oh), i32(n * p.od + w.od));
+        let g = select(vec4<f32>(0.0), textureLoad(bdy, dc), mine < p.ow);
+        let zw = i32(ow0 * p.sw + k.z) - i32(p.pw);
+        let s = i32(p.sw);
+        acc = bw_step4(acc, bw_x(n, q, zd, zh, zw), g, base);
+        acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + s), g, base + 1u);
+        acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 2 * s), g, base + 2u);
+        acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 3 * s), g, base + 3u);
+        acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 4 * s), g, base + 4u);
+        acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 5 * s), g, base + 5u);
+        acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 6 * s), g, base + 6u);
+        acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 7 * s), g, base + 7u);
+        w = walk_next(w);
     }
     if (pair >= taps * cq) { return; }
     let o = ((chunk * taps + tap) * p.cpad + 4u * q) * 16u;
@@ -718,29 +722,31 @@ fn conv_fast_backward_weight_tex8(ids: LaneIds) {
     let k = tap_axes(tap);
     let span = chunk_rows(chunk);
     var acc: BwAcc8;
-    for (var row = span.x; row < span.y; row++) {
-        let at = row_at(row, k);
-        let n = at.n;
-        let zd = at.zd;
-        let zh = at.zh;
-        for (var ow0 = 0u; ow0 < p.ow; ow0 += 8u) {
-            // Lane l fetches the two dy texels at ow0 + l (zero past the row's end).
-            let mine = ow0 + lane;
-            let ok = mine < p.ow;
-            let dc = vec3<i32>(i32(min(mine, p.ow - 1u)), i32(at.oh), i32(2u * n * p.od + at.od));
-            let g0 = select(vec4<f32>(0.0), textureLoad(bdy, dc), ok);
-            let g1 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, i32(p.od))), ok);
-            let zw = i32(ow0 * p.sw + k.z) - i32(p.pw);
-            let s = i32(p.sw);
-            acc = bw_step8(acc, bw_x(n, q, zd, zh, zw), g0, g1, base);
-            acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + s), g0, g1, base + 1u);
-            acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 2 * s), g0, g1, base + 2u);
-            acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 3 * s), g0, g1, base + 3u);
-            acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 4 * s), g0, g1, base + 4u);
-            acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 5 * s), g0, g1, base + 5u);
-            acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 6 * s), g0, g1, base + 6u);
-            acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 7 * s), g0, g1, base + 7u);
-        }
+    var w = walk_from(span.x);
+    let steps = walk_steps(span);
+    for (var i = 0u; i < steps; i++) {
+        let z = walk_z(w, k);
+        let n = w.n;
+        let zd = z.x;
+        let zh = z.y;
+        let ow0 = w.ow0;
+        // Lane l fetches the two dy texels at ow0 + l (zero past the row's end).
+        let mine = ow0 + lane;
+        let ok = mine < p.ow;
+        let dc = vec3<i32>(i32(min(mine, p.ow - 1u)), i32(w.oh), i32(2u * n * p.od + w.od));
+        let g0 = select(vec4<f32>(0.0), textureLoad(bdy, dc), ok);
+        let g1 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, i32(p.od))), ok);
+        let zw = i32(ow0 * p.sw + k.z) - i32(p.pw);
+        let s = i32(p.sw);
+        acc = bw_step8(acc, bw_x(n, q, zd, zh, zw), g0, g1, base);
+        acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + s), g0, g1, base + 1u);
+        acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 2 * s), g0, g1, base + 2u);
+        acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 3 * s), g0, g1, base + 3u);
+        acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 4 * s), g0, g1, base + 4u);
+        acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 5 * s), g0, g1, base + 5u);
+        acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 6 * s), g0, g1, base + 6u);
+        acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 7 * s), g0, g1, base + 7u);
+        w = walk_next(w);
     }
     if (bp.pair >= taps * (p.cpad / 4u)) { return; }
     let o = ((chunk * taps + tap) * p.cpad + 4u * q) * 16u;
