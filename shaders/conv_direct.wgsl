@@ -9,8 +9,8 @@
 // fetched one texel a lane and broadcast by subgroup shuffles, over the texture family's tiles (a
 // subgroup of 8 lanes = 8 outputs along W, 8 rows each) per group of 8 output channels; the weight
 // gradient multiplies them by the lane's own dy. Compiled appended to conv_fast.wgsl and
-// conv_tex.wgsl (their Params, bindings, bias4, put_raw, chunk_rows, and the forward tiles'
-// lane_tile, tap_depth, Rows, slide, Acc8, Tile8, tile8, mac_rows8, broadcast8, put_tile8).
+// conv_tex.wgsl (their Params, bindings, bias4, put_raw, chunk_rows, walk_from, walk_next, and the forward tiles'
+// lane_tile, tile_taps, next_tap, Rows, slide, Acc8, Tile8, tile8, mac_rows8, broadcast8, put_tile8).
 
 // ---- the stage: the input, 4 voxels along W a texel ----------------------------------------
 // Stage texel (j, h, (n * ci + c) * id + d) holds x[n, c, d, h, 4j..4j+3] (zero past iw): the
@@ -112,18 +112,17 @@ fn conv_direct_forward(ids: LaneIds) {
     if (tl.x >= p.total) { return; }
     let t = fwd_tile_of(tl.x, tl.y, (p.co + 7u) / 8u);
     var a = tile8(t.cg * 8u);
-    for (var kd = 0u; kd < p.kd; kd++) {
-        let zd = tap_depth(t.od, kd);
-        if (zd < 0) { continue; }
-        for (var c = 0u; c < p.ci; c++) {
-            for (var kh = 0u; kh < p.kh; kh++) {
-                let zh = i32(t.oh0 * p.sh + kh) - i32(p.ph);
-                for (var kw0 = 0u; kw0 < p.kw; kw0 += 4u) {
-                    let ws = i32(t.ow * p.sw + kw0) - i32(p.pw);
-                    a = mac_rows8(a, taps_rows(t.n, c, zd, zh, i32(p.sh), ws), direct_weights(t, tl.y, tl.z, c, kd, kh, kw0));
-                }
-            }
-        }
+    // One loop over (kd, c, kh, chunk of 4 W taps), as conv_tex.wgsl's tiles walk their taps
+    // (tile_taps): the walker's (kh, kw, q) count (c, kh, chunk).
+    let chunks = (p.kw + 3u) / 4u;
+    let ts = tile_taps(t.od, p.ci * p.kh * chunks);
+    var k = Tap(ts.kd0, 0u, 0u, 0u);
+    for (var i = ts.y0; i < ts.y1; i++) {
+        let zd = ts.d0 + i32(k.kd);
+        let zh = i32(t.oh0 * p.sh + k.kw) - i32(p.ph);
+        let ws = i32(t.ow * p.sw + 4u * k.q) - i32(p.pw);
+        a = mac_rows8(a, taps_rows(t.n, k.kh, zd, zh, i32(p.sh), ws), direct_weights(t, tl.y, tl.z, k.kh, k.kd, k.kw, 4u * k.q));
+        k = next_tap(k, p.ci, p.kh, chunks);
     }
     put_tile8(t, t.cg * 8u, a);
 }
@@ -160,28 +159,31 @@ fn conv_direct_forward_k5s2(ids: LaneIds) {
     let zh = i32(t.oh0 * 2u) - i32(p.ph);
     let ws = i32(t.ow * p.sw) - i32(p.pw);
     var a = tile8(t.cg * 8u);
-    for (var kd = 0u; kd < p.kd; kd++) {
-        let zd = tap_depth(t.od, kd);
-        if (zd < 0) { continue; }
-        for (var c = 0u; c < p.ci; c++) {
-            let even = taps_rows(t.n, c, zd, zh, 2, ws);
-            let odd = taps_rows(t.n, c, zd, zh + 1, 2, ws);
-            a = mac_rows8(a, even, direct_weights(t, tl.y, tl.z, c, kd, 0u, 0u));
-            a = mac_rows8(a, odd, direct_weights(t, tl.y, tl.z, c, kd, 1u, 0u));
-            let even2 = slide(even, taps4(t.n, c, zd, zh + 16, ws));
-            a = mac_rows8(a, even2, direct_weights(t, tl.y, tl.z, c, kd, 2u, 0u));
-            a = mac_rows8(a, slide(odd, taps4(t.n, c, zd, zh + 17, ws)), direct_weights(t, tl.y, tl.z, c, kd, 3u, 0u));
-            a = mac_rows8(a, slide(even2, taps4(t.n, c, zd, zh + 18, ws)), direct_weights(t, tl.y, tl.z, c, kd, 4u, 0u));
-            // W tap 4.
-            let e = tap1_rows(t.n, c, zd, zh, ws + 4);
-            let o = tap1_rows(t.n, c, zd, zh + 1, ws + 4);
-            a = mac_rows8_tap1(a, e, direct_weights(t, tl.y, tl.z, c, kd, 0u, 4u));
-            a = mac_rows8_tap1(a, o, direct_weights(t, tl.y, tl.z, c, kd, 1u, 4u));
-            let e2 = slide(e, tap1(t.n, c, zd, zh + 16, ws + 4));
-            a = mac_rows8_tap1(a, e2, direct_weights(t, tl.y, tl.z, c, kd, 2u, 4u));
-            a = mac_rows8_tap1(a, slide(o, tap1(t.n, c, zd, zh + 17, ws + 4)), direct_weights(t, tl.y, tl.z, c, kd, 3u, 4u));
-            a = mac_rows8_tap1(a, slide(e2, tap1(t.n, c, zd, zh + 18, ws + 4)), direct_weights(t, tl.y, tl.z, c, kd, 4u, 4u));
-        }
+    // One loop over (kd, c) (see conv_direct_forward).
+    let ts = tile_taps(t.od, p.ci);
+    var k = Tap(ts.kd0, 0u, 0u, 0u);
+    for (var i = ts.y0; i < ts.y1; i++) {
+        let zd = ts.d0 + i32(k.kd);
+        let kd = k.kd;
+        let c = k.q;
+        let even = taps_rows(t.n, c, zd, zh, 2, ws);
+        let odd = taps_rows(t.n, c, zd, zh + 1, 2, ws);
+        a = mac_rows8(a, even, direct_weights(t, tl.y, tl.z, c, kd, 0u, 0u));
+        a = mac_rows8(a, odd, direct_weights(t, tl.y, tl.z, c, kd, 1u, 0u));
+        let even2 = slide(even, taps4(t.n, c, zd, zh + 16, ws));
+        a = mac_rows8(a, even2, direct_weights(t, tl.y, tl.z, c, kd, 2u, 0u));
+        a = mac_rows8(a, slide(odd, taps4(t.n, c, zd, zh + 17, ws)), direct_weights(t, tl.y, tl.z, c, kd, 3u, 0u));
+        a = mac_rows8(a, slide(even2, taps4(t.n, c, zd, zh + 18, ws)), direct_weights(t, tl.y, tl.z, c, kd, 4u, 0u));
+        // W tap 4.
+        let e = tap1_rows(t.n, c, zd, zh, ws + 4);
+        let o = tap1_rows(t.n, c, zd, zh + 1, ws + 4);
+        a = mac_rows8_tap1(a, e, direct_weights(t, tl.y, tl.z, c, kd, 0u, 4u));
+        a = mac_rows8_tap1(a, o, direct_weights(t, tl.y, tl.z, c, kd, 1u, 4u));
+        let e2 = slide(e, tap1(t.n, c, zd, zh + 16, ws + 4));
+        a = mac_rows8_tap1(a, e2, direct_weights(t, tl.y, tl.z, c, kd, 2u, 4u));
+        a = mac_rows8_tap1(a, slide(o, tap1(t.n, c, zd, zh + 17, ws + 4)), direct_weights(t, tl.y, tl.z, c, kd, 3u, 4u));
+        a = mac_rows8_tap1(a, slide(e2, tap1(t.n, c, zd, zh + 18, ws + 4)), direct_weights(t, tl.y, tl.z, c, kd, 4u, 4u));
+        k = next_tap(k, 1u, 1u, p.ci);
     }
     put_tile8(t, t.cg * 8u, a);
 }

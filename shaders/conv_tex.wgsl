@@ -288,12 +288,6 @@ fn tap_rows(ft: FwdTile, t: Taps, k: Tap) -> Rows {
     return x_rows(ft.n, k.q, u32(t.d0 + i32(k.kd)), zh, i32(p.sh), zw);
 }
 
-// Input depth of tap kd for output depth od, or -1 off the grid.
-fn tap_depth(od: u32, kd: u32) -> i32 {
-    let zd = i32(od * p.sd + kd) - i32(p.pd);
-    return select(-1, zd, zd >= 0 && zd < i32(p.id));
-}
-
 // A lane's 8 rows x 16 channels.
 struct Tile16 { a0: Acc, a1: Acc, a2: Acc, a3: Acc, a4: Acc, a5: Acc, a6: Acc, a7: Acc }
 
