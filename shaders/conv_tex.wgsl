@@ -341,12 +341,27 @@ fn conv_fast_forward_tex(ids: LaneIds) {
     if (tl.x >= p.total) { return; }
     let ft = fwd_tile(tl.x, tl.y);
     let cq = p.cpad / 4u;
-    let t = tile_taps(ft.od, p.kh * p.kw * cq);
-    var k = Tap(t.kd0, 0u, 0u, 0u);
     var a = tile16(ft.cg);
-    for (var y = t.y0; y < t.y1; y++) {
-        a = mac_rows16(a, tap_rows(ft, t, k), weights16(ft.cg, tl.y, tl.z, y));
-        k = next_tap(k, p.kh, p.kw, cq);
+    if (cq < 8u) {
+        let t = tile_taps(ft.od, p.kh * p.kw * cq);
+        var k = Tap(t.kd0, 0u, 0u, 0u);
+        for (var y = t.y0; y < t.y1; y++) {
+            a = mac_rows16(a, tap_rows(ft, t, k), weights16(ft.cg, tl.y, tl.z, y));
+            k = next_tap(k, p.kh, p.kw, cq);
+        }
+    } else {
+        // Many channel quads (32 input channels or more): the quads in a loop of their own
+        // inside the taps' loop. Its two copies a tap are then few against its iterations,
+        // and the tap's row addressing stays outside it (in the one loop it is redone for
+        // every quad: measured 10-20% slower on conv2d 256->256 and the 512->256 projection).
+        let t = tile_taps(ft.od, p.kh * p.kw);
+        var k = Tap(t.kd0, 0u, 0u, 0u);
+        for (var tap = t.y0; tap < t.y1; tap++) {
+            for (var q = 0u; q < cq; q++) {
+                a = mac_rows16(a, tap_rows(ft, t, Tap(k.kd, k.kh, k.kw, q)), weights16(ft.cg, tl.y, tl.z, tap * cq + q));
+            }
+            k = next_tap(k, p.kh, p.kw, 1u);
+        }
     }
     put_tile16(ft, a);
 }
