@@ -33,6 +33,9 @@ fn fast_conv2d_and_transposed_forward_and_gradients() {
     check_fast(transposed2d([4, 4], [1, 1], Padding::Same, None), 54);
     check_fast(transposed2d([3, 3], [2, 2], Padding::explicit_2d([1, 1], [1, 1]), Some([1, 8, 10])), 55);
     check_fast(transposed3d([3, 2, 3], [1, 2, 2], explicit([1, 0, 2], [0, 1, 1]), None), 56);
+    // 32 input and 30 output channels: 8 quads of x for the forward and of dy for the input
+    // gradient, which the 16-channel tile loops over inside its taps' loop.
+    check_fast(Case { ci: 32, co: 30, input: [1, 4, 5], ..conv2d([3, 3], [1, 1], Padding::Same) }, 107);
 }
 
 /// Strided backward input (and transposed forward) runs one stride-1 conv per output phase
