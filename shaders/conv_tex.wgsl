@@ -536,7 +536,7 @@ fn conv_fast_forward_tex4_rows3(ids: LaneIds) {
 // adds the chunks. Params: the dispatch geometry (never folded); cpad of x, co16 of dy; nchunks,
 // chunk (rows per chunk), total = tiles.
 @group(0) @binding(1) var bx: texture_storage_3d<rgba32float, read>;    // packed x (as tx)
-@group(0) @binding(2) var bdy: texture_storage_3d<rgba32float, read>;   // packed dy: quads co16 * 4 per item
+@group(0) @binding(2) var bdy: texture_storage_3d<rgba32float, read>;   // packed dy: dy_quads() quads per item
 @group(0) @binding(3) var<storage, read_write> bpart: array<f32>;
 
 // dy texels per voxel as src/ops/conv_fast.rs (dy_tex_channels) packs dy for the weight
