@@ -1,4 +1,4 @@
-// prepend: conv_fast.wgsl, conv_tex.wgsl
+// prepend: conv_fast.wgsl, conv_tex.wgsl, conv_tex_weight.wgsl
 // The direct kernels of convs with few input channels (the first layer: 1 -> 8, 5^3, stride 2),
 // which the buffer family runs with kernel taps folded into channels (the texture family did too,
 // until its folded packing proved the slow part: it writes about kh * kw / (sh * sw) texels per
@@ -8,9 +8,10 @@
 // values picked with vector selects. The forward multiplies them by 8 output channels' weights,
 // fetched one texel a lane and broadcast by subgroup shuffles, over the texture family's tiles (a
 // subgroup of 8 lanes = 8 outputs along W, 8 rows each) per group of 8 output channels; the weight
-// gradient multiplies them by the lane's own dy. Compiled appended to conv_fast.wgsl and
-// conv_tex.wgsl (their Params, bindings, bias4, put_raw, chunk_rows, walk_from, walk_next, and the forward tiles'
-// lane_tile, tile_taps, next_tap, Rows, slide, Acc8, Tile8, tile8, mac_rows8, broadcast8, put_tile8).
+// gradient multiplies them by the lane's own dy. Compiled appended to conv_fast.wgsl,
+// conv_tex.wgsl and conv_tex_weight.wgsl (their Params, bindings, bias4, put_raw, chunk_rows,
+// walk_from, walk_next, dy_quads, and the forward tiles' lane_tile, tile_taps, next_tap, Rows,
+// slide, Acc8, Tile8, tile8, mac_rows8, broadcast8, put_tile8).
 
 // ---- the stage: the input, 4 voxels along W a texel ----------------------------------------
 // Stage texel (j, h, (n * ci + c) * id + d) holds x[n, c, d, h, 4j..4j+3] (zero past iw): the

@@ -10,9 +10,10 @@ use super::conv_pack::{Packed, pack_folded, pack_input, pack_w, pack_x, stage_x}
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
 const SHADER: Shader = wgsl!("conv_fast");
-/// The texture family: `conv_tex.wgsl` uses `conv_fast.wgsl`'s parameters and helpers, and
-/// `conv_direct.wgsl` (the direct kernels of convs with few input channels) both files'.
-pub(super) const TEX_SHADER: Shader = wgsl!("conv_tex": "conv_fast", "conv_tex", "conv_direct");
+/// The texture family: `conv_tex.wgsl` (packing and forward tiles) and `conv_tex_weight.wgsl`
+/// (weight-gradient tiles) use `conv_fast.wgsl`'s parameters and helpers, and
+/// `conv_direct.wgsl` (the direct kernels of convs with few input channels) all three files'.
+pub(super) const TEX_SHADER: Shader = wgsl!("conv_tex": "conv_fast", "conv_tex", "conv_tex_weight", "conv_direct");
 
 /// The tiled kernels' parameters for dispatch geometry `g` with `cpad` packed channels.
 fn params(g: &Geometry, cpad: usize) -> Params {
