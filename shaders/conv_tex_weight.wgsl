@@ -59,64 +59,75 @@ fn bw_pair(t: u32, lane: u32) -> BwPair {
     return BwPair(r / p.co16, r % p.co16, pair, min(pair / cq, taps - 1u), pair % cq);
 }
 
+// What every weight-gradient lane needs: its pair, whether that pair is real, the tap's axes,
+// the chunk's rows, and the lane's place in the tile (tl as lane_tile returns it).
+struct BwLane { bp: BwPair, live: bool, k: vec3<u32>, span: vec2<u32>, lane: u32, base: u32 }
+
+fn bw_lane(tl: vec3<u32>) -> BwLane {
+    let bp = bw_pair(tl.x, tl.y);
+    return BwLane(bp, bp.pair < p.kd * p.kh * p.kw * (p.cpad / 4u), tap_axes(bp.tap), chunk_rows(bp.chunk), tl.y, tl.z);
+}
+
+// The x texels of a step: the lane's channel quad at the 8 columns ow0..ow0+7 reach through
+// its tap (one per lane of the tile, handed around with its dy by the step functions).
+fn bw_xs(w: Walk, b: BwLane) -> Rows {
+    let z = walk_z(w, b.k);
+    let zw = i32(w.ow0 * p.sw + b.k.z) - i32(p.pw);
+    let s = i32(p.sw);
+    let n = w.n; let q = b.bp.q;
+    return Rows(bw_x(n, q, z.x, z.y, zw), bw_x(n, q, z.x, z.y, zw + s), bw_x(n, q, z.x, z.y, zw + 2 * s),
+                bw_x(n, q, z.x, z.y, zw + 3 * s), bw_x(n, q, z.x, z.y, zw + 4 * s), bw_x(n, q, z.x, z.y, zw + 5 * s),
+                bw_x(n, q, z.x, z.y, zw + 6 * s), bw_x(n, q, z.x, z.y, zw + 7 * s));
+}
+
+// The lane's dy texel of quad `quad` at column ow0 + lane of the step's row (zero past its end).
+fn dy_texel(w: Walk, lane: u32, quad: u32) -> vec4<f32> {
+    let mine = w.ow0 + lane;
+    let dc = vec3<i32>(i32(min(mine, p.ow - 1u)), i32(w.oh), i32((w.n * dy_quads() + quad) * p.od + w.od));
+    return select(vec4<f32>(0.0), textureLoad(bdy, dc), mine < p.ow);
+}
+
+// dw of output channels o.. (column c of part row o) for input channels 4q..4q+3 (v), rows
+// `stride` apart.
+fn put_dw(o: u32, c: u32, stride: u32, v: vec4<f32>) {
+    bpart[o + c] = v.x;
+    bpart[o + stride + c] = v.y;
+    bpart[o + 2u * stride + c] = v.z;
+    bpart[o + 3u * stride + c] = v.w;
+}
+
 @compute @workgroup_size(64)
 fn conv_fast_backward_weight_tex(ids: LaneIds) {
     let tl = lane_tile(ids);
-    let t = tl.x;
-    if (t >= p.total) { return; }
-    let lane = tl.y;
-    let base = tl.z;
-    let taps = p.kd * p.kh * p.kw;
-    let cq = p.cpad / 4u;
-    let bp = bw_pair(t, lane);
-    let cg = bp.cg; let chunk = bp.chunk; let tap = bp.tap; let q = bp.q;
-    let live = bp.pair < taps * cq;
-    let k = tap_axes(tap);
-    let kw = k.z;
-    let span = chunk_rows(chunk);
-    let dq = dy_quads();
+    if (tl.x >= p.total) { return; }
+    let b = bw_lane(tl);
+    let cg = b.bp.cg; let base = b.base;
     var acc: Acc16;
-    var w = walk_from(span.x);
-    let steps = walk_steps(span);
+    var w = walk_from(b.span.x);
+    let steps = walk_steps(b.span);
     for (var i = 0u; i < steps; i++) {
-        let z = walk_z(w, k);
-        let n = w.n;
-        let oh = w.oh;
-        let zd = z.x;
-        let zh = z.y;
-        let ow0 = w.ow0;
-        let dz = i32((n * dq + cg * 4u) * p.od + w.od);
-        // Lane l fetches the 16 dy values at ow0 + l (zero past the row's end).
-        let mine = ow0 + lane;
-        let ok = mine < p.ow;
-        let dc = vec3<i32>(i32(min(mine, p.ow - 1u)), i32(oh), dz);
-        let od_ = i32(p.od);
-        let g0 = select(vec4<f32>(0.0), textureLoad(bdy, dc), ok);
-        let g1 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, od_)), ok);
-        let g2 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, 2 * od_)), ok);
-        let g3 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, 3 * od_)), ok);
-        let zw = i32(ow0 * p.sw + kw) - i32(p.pw);
-        let s = i32(p.sw);
+        // Lane l fetches the 16 dy values at ow0 + l.
+        let g0 = dy_texel(w, b.lane, cg * 4u);
+        let g1 = dy_texel(w, b.lane, cg * 4u + 1u);
+        let g2 = dy_texel(w, b.lane, cg * 4u + 2u);
+        let g3 = dy_texel(w, b.lane, cg * 4u + 3u);
+        let x = bw_xs(w, b);
         // Written out: llvmpipe does not unroll loops.
-        acc = bw_step(acc, bw_x(n, q, zd, zh, zw), g0, g1, g2, g3, base);
-        acc = bw_step(acc, bw_x(n, q, zd, zh, zw + s), g0, g1, g2, g3, base + 1u);
-        acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 2 * s), g0, g1, g2, g3, base + 2u);
-        acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 3 * s), g0, g1, g2, g3, base + 3u);
-        acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 4 * s), g0, g1, g2, g3, base + 4u);
-        acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 5 * s), g0, g1, g2, g3, base + 5u);
-        acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 6 * s), g0, g1, g2, g3, base + 6u);
-        acc = bw_step(acc, bw_x(n, q, zd, zh, zw + 7 * s), g0, g1, g2, g3, base + 7u);
+        acc = bw_step(acc, x.r0, g0, g1, g2, g3, base);
+        acc = bw_step(acc, x.r1, g0, g1, g2, g3, base + 1u);
+        acc = bw_step(acc, x.r2, g0, g1, g2, g3, base + 2u);
+        acc = bw_step(acc, x.r3, g0, g1, g2, g3, base + 3u);
+        acc = bw_step(acc, x.r4, g0, g1, g2, g3, base + 4u);
+        acc = bw_step(acc, x.r5, g0, g1, g2, g3, base + 5u);
+        acc = bw_step(acc, x.r6, g0, g1, g2, g3, base + 6u);
+        acc = bw_step(acc, x.r7, g0, g1, g2, g3, base + 7u);
         w = walk_next(w);
     }
-    if (!live) { return; }
+    if (!b.live) { return; }
     let copad = p.co16 * 16u;
-    let o = ((chunk * taps + tap) * p.cpad + 4u * q) * copad + cg * 16u;
+    let o = ((b.bp.chunk * p.kd * p.kh * p.kw + b.bp.tap) * p.cpad + 4u * b.bp.q) * copad + cg * 16u;
     for (var k = 0u; k < 16u; k++) {
-        let v = acc.a[k];
-        bpart[o + k] = v.x;
-        bpart[o + copad + k] = v.y;
-        bpart[o + 2u * copad + k] = v.z;
-        bpart[o + 3u * copad + k] = v.w;
+        put_dw(o, k, copad, acc.a[k]);
     }
 }
 
@@ -133,52 +144,30 @@ fn bw_step4(acc: Acc4, x: vec4<f32>, g: vec4<f32>, j: u32) -> Acc4 {
 @compute @workgroup_size(64)
 fn conv_fast_backward_weight_tex4(ids: LaneIds) {
     let tl = lane_tile(ids);
-    let t = tl.x;
-    if (t >= p.total) { return; }
-    let lane = tl.y;
-    let base = tl.z;
-    let taps = p.kd * p.kh * p.kw;
-    let cq = p.cpad / 4u;
+    if (tl.x >= p.total) { return; }
     // co16 = 1: channel group 0.
-    let bp = bw_pair(t, lane);
-    let chunk = bp.chunk; let pair = bp.pair; let tap = bp.tap; let q = bp.q;
-    let k = tap_axes(tap);
-    let span = chunk_rows(chunk);
+    let b = bw_lane(tl);
+    let base = b.base;
     var acc = Acc4(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
-    var w = walk_from(span.x);
-    let steps = walk_steps(span);
+    var w = walk_from(b.span.x);
+    let steps = walk_steps(b.span);
     for (var i = 0u; i < steps; i++) {
-        let z = walk_z(w, k);
-        let n = w.n;
-        let zd = z.x;
-        let zh = z.y;
-        let ow0 = w.ow0;
-        // Lane l fetches the dy texel at ow0 + l (zero past the row's end).
-        let mine = ow0 + lane;
-        let dc = vec3<i32>(i32(min(mine, p.ow - 1u)), i32(w.oh), i32(n * p.od + w.od));
-        let g = select(vec4<f32>(0.0), textureLoad(bdy, dc), mine < p.ow);
-        let zw = i32(ow0 * p.sw + k.z) - i32(p.pw);
-        let s = i32(p.sw);
-        acc = bw_step4(acc, bw_x(n, q, zd, zh, zw), g, base);
-        acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + s), g, base + 1u);
-        acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 2 * s), g, base + 2u);
-        acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 3 * s), g, base + 3u);
-        acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 4 * s), g, base + 4u);
-        acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 5 * s), g, base + 5u);
-        acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 6 * s), g, base + 6u);
-        acc = bw_step4(acc, bw_x(n, q, zd, zh, zw + 7 * s), g, base + 7u);
+        let g = dy_texel(w, b.lane, 0u);
+        let x = bw_xs(w, b);
+        acc = bw_step4(acc, x.r0, g, base);
+        acc = bw_step4(acc, x.r1, g, base + 1u);
+        acc = bw_step4(acc, x.r2, g, base + 2u);
+        acc = bw_step4(acc, x.r3, g, base + 3u);
+        acc = bw_step4(acc, x.r4, g, base + 4u);
+        acc = bw_step4(acc, x.r5, g, base + 5u);
+        acc = bw_step4(acc, x.r6, g, base + 6u);
+        acc = bw_step4(acc, x.r7, g, base + 7u);
         w = walk_next(w);
     }
-    if (pair >= taps * cq) { return; }
-    let o = ((chunk * taps + tap) * p.cpad + 4u * q) * 16u;
-    let a = array<vec4<f32>, 4>(acc.a0, acc.a1, acc.a2, acc.a3);
-    for (var c = 0u; c < 4u; c++) {
-        let v = a[c];
-        bpart[o + c] = v.x;
-        bpart[o + 16u + c] = v.y;
-        bpart[o + 32u + c] = v.z;
-        bpart[o + 48u + c] = v.w;
-    }
+    if (!b.live) { return; }
+    let o = ((b.bp.chunk * p.kd * p.kh * p.kw + b.bp.tap) * p.cpad + 4u * b.bp.q) * 16u;
+    put_dw(o, 0u, 16u, acc.a0); put_dw(o, 1u, 16u, acc.a1);
+    put_dw(o, 2u, 16u, acc.a2); put_dw(o, 3u, 16u, acc.a3);
 }
 
 // ---- backward weight, half width (5-8 output channels): two dy texels per position --------
@@ -199,50 +188,31 @@ fn bw_step8(acc: BwAcc8, x: vec4<f32>, g0: vec4<f32>, g1: vec4<f32>, j: u32) -> 
 @compute @workgroup_size(64)
 fn conv_fast_backward_weight_tex8(ids: LaneIds) {
     let tl = lane_tile(ids);
-    let t = tl.x;
-    if (t >= p.total) { return; }
-    let lane = tl.y;
-    let base = tl.z;
-    let taps = p.kd * p.kh * p.kw;
+    if (tl.x >= p.total) { return; }
     // co16 = 1: channel group 0.
-    let bp = bw_pair(t, lane);
-    let chunk = bp.chunk; let tap = bp.tap; let q = bp.q;
-    let k = tap_axes(tap);
-    let span = chunk_rows(chunk);
+    let b = bw_lane(tl);
+    let base = b.base;
     var acc: BwAcc8;
-    var w = walk_from(span.x);
-    let steps = walk_steps(span);
+    var w = walk_from(b.span.x);
+    let steps = walk_steps(b.span);
     for (var i = 0u; i < steps; i++) {
-        let z = walk_z(w, k);
-        let n = w.n;
-        let zd = z.x;
-        let zh = z.y;
-        let ow0 = w.ow0;
-        // Lane l fetches the two dy texels at ow0 + l (zero past the row's end).
-        let mine = ow0 + lane;
-        let ok = mine < p.ow;
-        let dc = vec3<i32>(i32(min(mine, p.ow - 1u)), i32(w.oh), i32(2u * n * p.od + w.od));
-        let g0 = select(vec4<f32>(0.0), textureLoad(bdy, dc), ok);
-        let g1 = select(vec4<f32>(0.0), textureLoad(bdy, dc + vec3<i32>(0, 0, i32(p.od))), ok);
-        let zw = i32(ow0 * p.sw + k.z) - i32(p.pw);
-        let s = i32(p.sw);
-        acc = bw_step8(acc, bw_x(n, q, zd, zh, zw), g0, g1, base);
-        acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + s), g0, g1, base + 1u);
-        acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 2 * s), g0, g1, base + 2u);
-        acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 3 * s), g0, g1, base + 3u);
-        acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 4 * s), g0, g1, base + 4u);
-        acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 5 * s), g0, g1, base + 5u);
-        acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 6 * s), g0, g1, base + 6u);
-        acc = bw_step8(acc, bw_x(n, q, zd, zh, zw + 7 * s), g0, g1, base + 7u);
+        // Lane l fetches the two dy texels at ow0 + l.
+        let g0 = dy_texel(w, b.lane, 0u);
+        let g1 = dy_texel(w, b.lane, 1u);
+        let x = bw_xs(w, b);
+        acc = bw_step8(acc, x.r0, g0, g1, base);
+        acc = bw_step8(acc, x.r1, g0, g1, base + 1u);
+        acc = bw_step8(acc, x.r2, g0, g1, base + 2u);
+        acc = bw_step8(acc, x.r3, g0, g1, base + 3u);
+        acc = bw_step8(acc, x.r4, g0, g1, base + 4u);
+        acc = bw_step8(acc, x.r5, g0, g1, base + 5u);
+        acc = bw_step8(acc, x.r6, g0, g1, base + 6u);
+        acc = bw_step8(acc, x.r7, g0, g1, base + 7u);
         w = walk_next(w);
     }
-    if (bp.pair >= taps * (p.cpad / 4u)) { return; }
-    let o = ((chunk * taps + tap) * p.cpad + 4u * q) * 16u;
+    if (!b.live) { return; }
+    let o = ((b.bp.chunk * p.kd * p.kh * p.kw + b.bp.tap) * p.cpad + 4u * b.bp.q) * 16u;
     for (var c = 0u; c < 8u; c++) {
-        let v = acc.a[c];
-        bpart[o + c] = v.x;
-        bpart[o + 16u + c] = v.y;
-        bpart[o + 32u + c] = v.z;
-        bpart[o + 48u + c] = v.w;
+        put_dw(o, c, 16u, acc.a[c]);
     }
 }
