@@ -288,8 +288,9 @@ fn dy_packing(gpu: &Gpu, g: &Geometry, ops: Operands) -> (Geometry, usize, bool)
 
 /// Both gradients of one conv, `dx = conv^T(dy, w)` and `dw`, packing dy once where the two
 /// would pack it alike (on textures, with at most 8 or a multiple of 16 output channels: the
-/// 16-channel convs, the first layer and the heads of the RenderNet presets): one dispatch and one pass over
-/// dy fewer than [`backward_input`] then [`backward_weight`], which it equals exactly.
+/// 16-channel convs, the first layer and the heads of the RenderNet presets): one dispatch and
+/// one pass over dy fewer than [`backward_input`] then [`backward_weight`], which it equals
+/// exactly.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn backward(
     gpu: &Gpu,
