@@ -68,6 +68,11 @@ fn bw_lane(tl: vec3<u32>) -> BwLane {
     return BwLane(bp, bp.pair < p.kd * p.kh * p.kw * (p.cpad / 4u), tap_axes(bp.tap), chunk_rows(bp.chunk), tl.y, tl.z);
 }
 
+// The first part row of the lane's pair: part[chunk][tap][4q] (rows of copad columns).
+fn bw_part_row(b: BwLane) -> u32 {
+    return (b.bp.chunk * p.kd * p.kh * p.kw + b.bp.tap) * p.cpad + 4u * b.bp.q;
+}
+
 // The x texels of a step: the lane's channel quad at the 8 columns ow0..ow0+7 reach through
 // its tap (one per lane of the tile, handed around with its dy by the step functions).
 fn bw_xs(w: Walk, b: BwLane) -> Rows {
@@ -125,7 +130,7 @@ fn conv_fast_backward_weight_tex(ids: LaneIds) {
     }
     if (!b.live) { return; }
     let copad = p.co16 * 16u;
-    let o = ((b.bp.chunk * p.kd * p.kh * p.kw + b.bp.tap) * p.cpad + 4u * b.bp.q) * copad + cg * 16u;
+    let o = bw_part_row(b) * copad + cg * 16u;
     for (var k = 0u; k < 16u; k++) {
         put_dw(o, k, copad, acc.a[k]);
     }
@@ -165,7 +170,7 @@ fn conv_fast_backward_weight_tex4(ids: LaneIds) {
         w = walk_next(w);
     }
     if (!b.live) { return; }
-    let o = ((b.bp.chunk * p.kd * p.kh * p.kw + b.bp.tap) * p.cpad + 4u * b.bp.q) * 16u;
+    let o = bw_part_row(b) * 16u;
     put_dw(o, 0u, 16u, acc.a0); put_dw(o, 1u, 16u, acc.a1);
     put_dw(o, 2u, 16u, acc.a2); put_dw(o, 3u, 16u, acc.a3);
 }
@@ -211,7 +216,7 @@ fn conv_fast_backward_weight_tex8(ids: LaneIds) {
         w = walk_next(w);
     }
     if (!b.live) { return; }
-    let o = ((b.bp.chunk * p.kd * p.kh * p.kw + b.bp.tap) * p.cpad + 4u * b.bp.q) * 16u;
+    let o = bw_part_row(b) * 16u;
     for (var c = 0u; c < 8u; c++) {
         put_dw(o, c, 16u, acc.a[c]);
     }
