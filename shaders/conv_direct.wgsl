@@ -360,3 +360,97 @@ fn conv_direct_backward_weight_k5(ids: LaneIds) {
     put_direct_dw_tap4(b3, k, 3u, chunk, lane);
     put_direct_dw_tap4(b4, k, 4u, chunk, lane);
 }
+
+// ---- backward input of a 1-channel conv, 5^3 kernel, stride 2 (the first layer) -----------
+// dx[n, 0, z, y, x] = Σ_o Σ_k w[o, 0, kd, kh, kw] dy[n, o, (z + pd - kd) / 2, (y + ph - kh) / 2,
+// (x + pw - kw) / 2] over the taps where all three divide. The phase split (conv_fast.wgsl's
+// header) runs it as 8 stride-1 convs of one output channel on the 4-channel tile: 3/4 of its
+// FMAs multiply padding, a fetched dy texel feeds 4 useful ones, and 8 dispatches pack 8
+// sub-kernels. Here one dispatch covers every phase: 8 lanes = 8 dx columns, each lane 8 rows
+// at one depth. Along H, row r of a tile meets dy row i0 + m through tap kh = 4 + s + r - 2m (s
+// the parity of the tile's first row plus ph; i0 chosen so), so the 8 rows share 7 fetched dy
+// rows, 3 taps a row. Along W each lane walks its own phase's taps kw = (x + pw) % 2 + 2t, its
+// weights handed over by shuffles; along D the tile's phase's taps bound the loop. Params: the
+// dispatch geometry of the backward input (input dy: ci its channels, cpad its packed
+// channels; output dx: co = 1), the conv's kernel (5), stride (2) and pads. Weights: the
+// forward's texture (1 input channel: texel (16 * (o / 16) + (o / 4) % 4, tap) holds output
+// channels o..o+3).
+
+// W6: the lane's weights of one dy quad at (kd, kw) for tap rows kh = s - 1 .. s + 4, zero
+// off the kernel: m1 = kh -1 + s, w0 .. w4 = kh 0 + s .. 4 + s.
+struct W6 { m1: vec4<f32>, w0: vec4<f32>, w1: vec4<f32>, w2: vec4<f32>, w3: vec4<f32>, w4: vec4<f32> }
+
+// Lane l fetches kh = l / 2 and kh = 4 at kw = l % 2 + 2t; each lane takes its own parity's.
+fn bi_weights(lane: u32, base: u32, par: u32, kd: u32, t: u32, q: u32, s: bool) -> W6 {
+    let kw = (lane & 1u) + 2u * t;
+    let x = i32((q / 4u) * 16u + q % 4u);
+    let a = select(vec4<f32>(0.0), textureLoad(tw, vec2<i32>(x, i32((kd * 5u + lane / 2u) * 5u + kw))), kw < 5u);
+    let b = select(vec4<f32>(0.0), textureLoad(tw, vec2<i32>(x, i32((kd * 5u + 4u) * 5u + kw))), kw < 5u);
+    let k0 = subgroupShuffle(a, base + par);
+    let k1 = subgroupShuffle(a, base + 2u + par);
+    let k2 = subgroupShuffle(a, base + 4u + par);
+    let k3 = subgroupShuffle(a, base + 6u + par);
+    let k4 = subgroupShuffle(b, base + par);
+    let z = vec4<f32>(0.0);
+    return W6(select(z, k0, s), select(k0, k1, s), select(k1, k2, s), select(k2, k3, s), select(k3, k4, s), select(k4, z, s));
+}
+
+// Rows r0..r6 (r7 unused): dy rows zh..zh + 6 of column zw.
+fn dy_rows7(n: u32, q: u32, zd: u32, zh: i32, zw: i32) -> Rows {
+    return Rows(tex_x(n, q, zd, zh, zw), tex_x(n, q, zd, zh + 1, zw), tex_x(n, q, zd, zh + 2, zw), tex_x(n, q, zd, zh + 3, zw),
+                tex_x(n, q, zd, zh + 4, zw), tex_x(n, q, zd, zh + 5, zw), tex_x(n, q, zd, zh + 6, zw), vec4<f32>(0.0));
+}
+
+// The 8 rows (lo: 0..3, hi: 4..7) += their three taps each.
+struct Col8 { lo: vec4<f32>, hi: vec4<f32> }
+
+fn bi_mac(a: Col8, d: Rows, w: W6) -> Col8 {
+    return Col8(a.lo + vec4<f32>(dot(d.r0, w.w4) + dot(d.r1, w.w2) + dot(d.r2, w.w0),
+                                 dot(d.r1, w.w3) + dot(d.r2, w.w1) + dot(d.r3, w.m1),
+                                 dot(d.r1, w.w4) + dot(d.r2, w.w2) + dot(d.r3, w.w0),
+                                 dot(d.r2, w.w3) + dot(d.r3, w.w1) + dot(d.r4, w.m1)),
+                a.hi + vec4<f32>(dot(d.r2, w.w4) + dot(d.r3, w.w2) + dot(d.r4, w.w0),
+                                 dot(d.r3, w.w3) + dot(d.r4, w.w1) + dot(d.r5, w.m1),
+                                 dot(d.r3, w.w4) + dot(d.r4, w.w2) + dot(d.r5, w.w0),
+                                 dot(d.r4, w.w3) + dot(d.r5, w.w1) + dot(d.r6, w.m1)));
+}
+
+fn put_col8(t: FwdTile, a: Col8) {
+    let pos = tile_pos(t);
+    let rows = array<f32, 8>(a.lo.x, a.lo.y, a.lo.z, a.lo.w, a.hi.x, a.hi.y, a.hi.z, a.hi.w);
+    for (var r = 0u; r < 8u; r++) {
+        if (t.oh0 + r < p.oh) { put_raw(t.n, 0u, pos + r * p.ysh, t.ow, vec4<f32>(rows[r], 0.0, 0.0, 0.0)); }
+    }
+}
+
+@compute @workgroup_size(64)
+fn conv_direct_backward_input_k5s2(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    if (tl.x >= p.total) { return; }
+    let t = fwd_tile_of(tl.x, tl.y, 1u);
+    let cq = p.cpad / 4u;
+    // Depth: taps kd = zp % 2 + 2u meet dy depth zp / 2 - u; u from u0 to u1.
+    let zp = t.od + p.pd;
+    let kd0 = zp & 1u;
+    let zb = i32(zp / 2u);
+    let u0 = u32(max(zb - i32(p.id) + 1, 0));
+    let u1 = u32(clamp(zb + 1, 0, i32(3u - kd0)));
+    // Rows: the tile's first row plus ph is 4 + s + 2 i0.
+    let b = i32(t.oh0 + p.ph);
+    let s = (b & 1) == 1;
+    let i0 = (b - 4 - (b & 1)) / 2;
+    // Columns: the lane's phase and the dy column of its tap t = 0.
+    let xp = t.ow + p.pw;
+    let par = xp & 1u;
+    let j0 = i32(xp / 2u);
+    var a = Col8(vec4<f32>(bias4(0u).x), vec4<f32>(bias4(0u).x));
+    // One loop over (u, t, q) (see tile_taps): the walker's (kd, kh, q) count them.
+    var k = Tap(u0, 0u, 0u, 0u);
+    for (var i = u0 * 3u * cq; i < max(u0, u1) * 3u * cq; i++) {
+        let kd = kd0 + 2u * k.kd;
+        let d = dy_rows7(t.n, k.q, u32(zb - i32(k.kd)), i0, j0 - i32(k.kh));
+        a = bi_mac(a, d, bi_weights(tl.y, tl.z, par, kd, k.kh, k.q, s));
+        k = next_tap(k, 3u, 1u, cq);
+    }
+    if (t.ow < p.ow) { put_col8(t, a); }
+}

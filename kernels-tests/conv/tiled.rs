@@ -93,6 +93,20 @@ fn direct_kernels_of_few_input_channels() {
     check(&with(conv2d([5, 5], [2, 1], Padding::Same), 1, 5, [1, 17, 9]), 104);
 }
 
+/// `conv_direct_backward_input_k5s2`, the first layer's input gradient (1 input channel, 5^3
+/// at stride 2) with every phase in one dispatch, forced onto textures: pads of both parities
+/// on every axis (the tile's first row meets its dy rows through taps 4 + s + r - 2m, s = 0 or
+/// 1; a lane's taps kw follow its column's parity), two tiles of dx rows and of columns (13 x
+/// 11), 6 and 7 dy channels (two quads, the second part-filled); and a transposed conv to 1
+/// channel, whose forward it is too, with the bias and one dy quad of 3 channels.
+#[test]
+fn direct_backward_input_of_one_channel() {
+    let with = |c: Case, ci: usize, co: usize, input: [usize; 3]| Case { ci, co, input, kernel: ConvKernel::Texture, ..c };
+    check(&with(conv3d([5, 5, 5], [2, 2, 2], explicit([1, 0, 3], [2, 1, 0])), 1, 6, [7, 13, 11]), 110);
+    check(&with(conv3d([5, 5, 5], [2, 2, 2], explicit([2, 1, 0], [0, 2, 3])), 1, 7, [6, 11, 13]), 111);
+    check(&with(transposed3d([5, 5, 5], [2, 2, 2], explicit([1, 2, 1], [2, 1, 2]), None), 3, 1, [3, 5, 4]), 112);
+}
+
 /// The texture family's 4- and 8-channel tiles (`conv_fast_forward_tex4`, its `_rows3` form,
 /// `..._tex8`, `..._backward_weight_tex4` and `_tex8`) on heads with enough input channels not to fold
 /// (8 -> 3, 16 -> 1, 12 -> 7, 3x3), forced onto textures: with fewer input channels the direct

@@ -328,6 +328,9 @@ fn backward_input_packed(
     cpad: usize,
     tex: bool,
 ) -> Result<()> {
+    if tex && input_k5s2(gpu, g) {
+        return backward_input_k5s2(gpu, pass, g, dyp, w, b, dx, cpad);
+    }
     let [_, fh, fw] = g.input;
     let [sd, sh, sw] = g.stride;
     for i in 0..volume(g.stride) {
@@ -369,6 +372,34 @@ fn backward_input_packed(
         forward_packed(gpu, pass, p, dyp, &wp, b, dx)?;
     }
     Ok(())
+}
+
+/// Whether [`backward_input_k5s2`] runs `g`'s input gradient: one input channel, a 5^3
+/// kernel at stride 2 (the first layer), its forward weight texture within the device's limits.
+fn input_k5s2(gpu: &Gpu, g: &Geometry) -> bool {
+    g.ci == 1 && g.rank == 5 && g.kernel == [5; 3] && g.stride == [2; 3] && w_texture_fits(gpu, g, 4)
+}
+
+/// `dx = conv^T(dy, w) (+ b)` of a 1-channel conv with a 5^3 kernel at stride 2, every phase
+/// in one dispatch (`conv_direct_backward_input_k5s2`), on dy packed by [`dy_packing`] and the
+/// forward's weight texture.
+#[allow(clippy::too_many_arguments)]
+fn backward_input_k5s2(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    dyp: &Packed,
+    w: &Tensor,
+    b: Option<&Tensor>,
+    dx: &Tensor,
+    cpad: usize,
+) -> Result<()> {
+    let wp = pack_w(gpu, pass, params(g, 4), w, true)?;
+    let t = Geometry { ci: g.co, co: g.ci, input: g.output, output: g.input, ..*g };
+    let tiles = g.n * volume([g.input[0], g.input[1].div_ceil(8), g.input[2].div_ceil(8)]);
+    let p = Params { has_bias: b.is_some() as u32, total: tiles as u32, ..params(&t, cpad) };
+    let args = [dyp.arg(), wp.arg(), b.map_or(Arg::Absent, Arg::R), Arg::W(dx)];
+    gpu.dispatch(pass, TEX_SHADER, "conv_direct_backward_input_k5s2", &p, &args, grid_1d(tiles as u64 * 8, 64)?)
 }
 
 /// `dy` packed as the texture kernels pack an input: dy's channels over the output extent
