@@ -366,31 +366,38 @@ fn conv_direct_backward_weight_k5(ids: LaneIds) {
 // (x + pw - kw) / 2] over the taps where all three divide. The phase split (conv_fast.wgsl's
 // header) runs it as 8 stride-1 convs of one output channel on the 4-channel tile: 3/4 of its
 // FMAs multiply padding, a fetched dy texel feeds 4 useful ones, and 8 dispatches pack 8
-// sub-kernels. Here one dispatch covers every phase: 8 lanes = 8 dx columns, each lane 8 rows
-// at one depth. Along H, row r of a tile meets dy row i0 + m through tap kh = 4 + s + r - 2m (s
-// the parity of the tile's first row plus ph; i0 chosen so), so the 8 rows share 7 fetched dy
-// rows, 3 taps a row. Along W each lane walks its own phase's taps kw = (x + pw) % 2 + 2t, its
-// weights handed over by shuffles; along D the tile's phase's taps bound the loop. Params: the
-// dispatch geometry of the backward input (input dy: ci its channels, cpad its packed
-// channels; output dx: co = 1), the conv's kernel (5), stride (2) and pads. Weights: the
-// forward's texture (1 input channel: texel (16 * (o / 16) + (o / 4) % 4, tap) holds output
-// channels o..o+3).
+// sub-kernels. Here one dispatch covers every phase, and each fetched dy texel feeds 2 columns
+// x 3 rows: a lane takes the two dx columns x + pw = 2c, 2c + 1 (W taps kw = 2t and 2t + 1 both
+// meet dy column c - t), 8 rows each at one depth, so a tile of 8 lanes covers 16 columns.
+// Along H, row r of a tile meets dy row i0 + m through tap kh = 4 + s + r - 2m (s the parity of
+// the tile's first row plus ph; i0 chosen so): the 8 rows share 7 fetched dy rows, 3 taps a
+// row. Along D the tile's phase bounds the loop. Params: the dispatch geometry of the backward
+// input (input dy: ci its channels, cpad its packed channels; output dx: co = 1), the conv's
+// kernel (5), stride (2) and pads. Weights: the forward's texture (1 input channel: texel (16
+// * (o / 16) + (o / 4) % 4, tap) holds output channels o..o+3).
 
-// W6: the lane's weights of one dy quad at (kd, kw) for tap rows kh = s - 1 .. s + 4, zero
-// off the kernel: m1 = kh -1 + s, w0 .. w4 = kh 0 + s .. 4 + s.
+// W6: one parity's weights of a dy quad at (kd, kw) for tap rows kh = s - 1 .. s + 4, zero off
+// the kernel: m1 = kh s - 1, w0 .. w4 = kh s .. s + 4.
 struct W6 { m1: vec4<f32>, w0: vec4<f32>, w1: vec4<f32>, w2: vec4<f32>, w3: vec4<f32>, w4: vec4<f32> }
 
-// Lane l fetches kh = l / 2 and kh = 4 at kw = l % 2 + 2t; each lane takes its own parity's.
-fn bi_weights(lane: u32, base: u32, par: u32, kd: u32, t: u32, q: u32, s: bool) -> W6 {
+// Lane l's two weight texels of quad q at depth tap kd: tap rows l / 2 and 4, kw = l % 2 + 2t.
+struct BiTexels { a: vec4<f32>, b: vec4<f32> }
+
+fn bi_texels(lane: u32, kd: u32, t: u32, q: u32) -> BiTexels {
     let kw = (lane & 1u) + 2u * t;
     let x = i32((q / 4u) * 16u + q % 4u);
-    let a = select(vec4<f32>(0.0), textureLoad(tw, vec2<i32>(x, i32((kd * 5u + lane / 2u) * 5u + kw))), kw < 5u);
-    let b = select(vec4<f32>(0.0), textureLoad(tw, vec2<i32>(x, i32((kd * 5u + 4u) * 5u + kw))), kw < 5u);
-    let k0 = subgroupShuffle(a, base + par);
-    let k1 = subgroupShuffle(a, base + 2u + par);
-    let k2 = subgroupShuffle(a, base + 4u + par);
-    let k3 = subgroupShuffle(a, base + 6u + par);
-    let k4 = subgroupShuffle(b, base + par);
+    let a = textureLoad(tw, vec2<i32>(x, i32((kd * 5u + lane / 2u) * 5u + kw)));
+    let b = textureLoad(tw, vec2<i32>(x, i32((kd * 5u + 4u) * 5u + kw)));
+    return BiTexels(select(vec4<f32>(0.0), a, kw < 5u), select(vec4<f32>(0.0), b, kw < 5u));
+}
+
+// Parity par's W6 from the tile's texels.
+fn bi_weights(w: BiTexels, base: u32, par: u32, s: bool) -> W6 {
+    let k0 = subgroupShuffle(w.a, base + par);
+    let k1 = subgroupShuffle(w.a, base + 2u + par);
+    let k2 = subgroupShuffle(w.a, base + 4u + par);
+    let k3 = subgroupShuffle(w.a, base + 6u + par);
+    let k4 = subgroupShuffle(w.b, base + par);
     let z = vec4<f32>(0.0);
     return W6(select(z, k0, s), select(k0, k1, s), select(k1, k2, s), select(k2, k3, s), select(k3, k4, s), select(k4, z, s));
 }
@@ -401,7 +408,7 @@ fn dy_rows7(n: u32, q: u32, zd: u32, zh: i32, zw: i32) -> Rows {
                 tex_x(n, q, zd, zh + 4, zw), tex_x(n, q, zd, zh + 5, zw), tex_x(n, q, zd, zh + 6, zw), vec4<f32>(0.0));
 }
 
-// The 8 rows (lo: 0..3, hi: 4..7) += their three taps each.
+// One column's 8 rows (lo: 0..3, hi: 4..7) += their three taps each.
 struct Col8 { lo: vec4<f32>, hi: vec4<f32> }
 
 fn bi_mac(a: Col8, d: Rows, w: W6) -> Col8 {
@@ -415,42 +422,69 @@ fn bi_mac(a: Col8, d: Rows, w: W6) -> Col8 {
                                  dot(d.r4, w.w3) + dot(d.r5, w.w1) + dot(d.r6, w.m1)));
 }
 
-fn put_col8(t: FwdTile, a: Col8) {
-    let pos = tile_pos(t);
-    let rows = array<f32, 8>(a.lo.x, a.lo.y, a.lo.z, a.lo.w, a.hi.x, a.hi.y, a.hi.z, a.hi.w);
-    for (var r = 0u; r < 8u; r++) {
-        if (t.oh0 + r < p.oh) { put_raw(t.n, 0u, pos + r * p.ysh, t.ow, vec4<f32>(rows[r], 0.0, 0.0, 0.0)); }
-    }
+// dx value at `pos` of item n (one channel), if `ok`.
+fn put_dx(n: u32, pos: u32, ok: bool, v: f32) {
+    if (ok) { fy[n * p.ycs + pos] = v; }
 }
 
+// Column x's rows oh0.. of (n, od), those inside dx; written out, not looped over an array
+// (which lavapipe would keep in memory and index lane by lane).
+fn put_col8(n: u32, od: u32, oh0: u32, x: i32, a: Col8) {
+    let ok = x >= 0 && x < i32(p.ow);
+    let pos = p.yoff + od * p.ysd + oh0 * p.ysh + u32(x) * p.ysw;
+    let rows = p.oh - oh0;
+    put_dx(n, pos, ok, a.lo.x);
+    put_dx(n, pos + p.ysh, ok && rows > 1u, a.lo.y);
+    put_dx(n, pos + 2u * p.ysh, ok && rows > 2u, a.lo.z);
+    put_dx(n, pos + 3u * p.ysh, ok && rows > 3u, a.lo.w);
+    put_dx(n, pos + 4u * p.ysh, ok && rows > 4u, a.hi.x);
+    put_dx(n, pos + 5u * p.ysh, ok && rows > 5u, a.hi.y);
+    put_dx(n, pos + 6u * p.ysh, ok && rows > 6u, a.hi.z);
+    put_dx(n, pos + 7u * p.ysh, ok && rows > 7u, a.hi.w);
+}
+
+// Dispatched as (column blocks x row blocks, ceil(od / 8), n) workgroups of 8 tiles, one depth
+// each: the tile's coordinates come from workgroup ids, whose divisions lavapipe does once, not
+// per lane (a per-lane division by a runtime value is a scalar loop; with this kernel's short
+// loop the tile's setup took a fifth of its time).
 @compute @workgroup_size(64)
-fn conv_direct_backward_input_k5s2(ids: LaneIds) {
-    let tl = lane_tile(ids);
-    if (tl.x >= p.total) { return; }
-    let t = fwd_tile_of(tl.x, tl.y, 1u);
+fn conv_direct_backward_input_k5s2(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32,
+                                   @builtin(subgroup_invocation_id) sid: u32) {
+    // Tiles: 16 columns (from x + pw = 2 * (pw / 2)) x 8 rows at one depth.
+    let hblocks = (p.oh + 7u) / 8u;
+    let cb = wg.x / hblocks;
+    let oh0 = (wg.x % hblocks) * 8u;
+    let od = wg.y * 8u + li / 8u;
+    let n = wg.z;
+    if (od >= p.od) { return; }
+    let lane = sid & 7u;
+    let base = sid & ~7u;
     let cq = p.cpad / 4u;
     // Depth: taps kd = zp % 2 + 2u meet dy depth zp / 2 - u; u from u0 to u1.
-    let zp = t.od + p.pd;
+    let zp = od + p.pd;
     let kd0 = zp & 1u;
     let zb = i32(zp / 2u);
     let u0 = u32(max(zb - i32(p.id) + 1, 0));
     let u1 = u32(clamp(zb + 1, 0, i32(3u - kd0)));
     // Rows: the tile's first row plus ph is 4 + s + 2 i0.
-    let b = i32(t.oh0 + p.ph);
+    let b = i32(oh0 + p.ph);
     let s = (b & 1) == 1;
     let i0 = (b - 4 - (b & 1)) / 2;
-    // Columns: the lane's phase and the dy column of its tap t = 0.
-    let xp = t.ow + p.pw;
-    let par = xp & 1u;
-    let j0 = i32(xp / 2u);
-    var a = Col8(vec4<f32>(bias4(0u).x), vec4<f32>(bias4(0u).x));
+    // Columns: x + pw = 2c (even taps) and 2c + 1 (odd), both reading dy column c - t.
+    let c = cb * 8u + lane + p.pw / 2u;
+    let x0 = i32(2u * c) - i32(p.pw);
+    let bias = vec4<f32>(bias4(0u).x);
+    var e = Col8(bias, bias);
+    var o = Col8(bias, bias);
     // One loop over (u, t, q) (see tile_taps): the walker's (kd, kh, q) count them.
     var k = Tap(u0, 0u, 0u, 0u);
     for (var i = u0 * 3u * cq; i < max(u0, u1) * 3u * cq; i++) {
-        let kd = kd0 + 2u * k.kd;
-        let d = dy_rows7(t.n, k.q, u32(zb - i32(k.kd)), i0, j0 - i32(k.kh));
-        a = bi_mac(a, d, bi_weights(tl.y, tl.z, par, kd, k.kh, k.q, s));
+        let d = dy_rows7(n, k.q, u32(zb - i32(k.kd)), i0, i32(c) - i32(k.kh));
+        let w = bi_texels(lane, kd0 + 2u * k.kd, k.kh, k.q);
+        e = bi_mac(e, d, bi_weights(w, base, 0u, s));
+        o = bi_mac(o, d, bi_weights(w, base, 1u, s));
         k = next_tap(k, 3u, 1u, cq);
     }
-    if (t.ow < p.ow) { put_col8(t, a); }
+    put_col8(n, od, oh0, x0, e);
+    put_col8(n, od, oh0, x0 + 1, o);
 }

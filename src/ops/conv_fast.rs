@@ -396,10 +396,13 @@ fn backward_input_k5s2(
 ) -> Result<()> {
     let wp = pack_w(gpu, pass, params(g, 4), w, true)?;
     let t = Geometry { ci: g.co, co: g.ci, input: g.output, output: g.input, ..*g };
-    let tiles = g.n * volume([g.input[0], g.input[1].div_ceil(8), g.input[2].div_ceil(8)]);
-    let p = Params { has_bias: b.is_some() as u32, total: tiles as u32, ..params(&t, cpad) };
+    let p = Params { has_bias: b.is_some() as u32, ..params(&t, cpad) };
     let args = [dyp.arg(), wp.arg(), b.map_or(Arg::Absent, Arg::R), Arg::W(dx)];
-    gpu.dispatch(pass, TEX_SHADER, "conv_direct_backward_input_k5s2", &p, &args, grid_1d(tiles as u64 * 8, 64)?)
+    // Workgroups: (tiles of 16 columns from x + pw = 2 * (pw / 2), so 15 + pw % 2 past the
+    // last, x tiles of 8 rows; 8 depths; items).
+    let [depth, rows, cols] = g.input;
+    let grid = [((cols + g.pad[2] % 2).div_ceil(16) * rows.div_ceil(8)) as u32, depth.div_ceil(8) as u32, g.n as u32];
+    gpu.dispatch(pass, TEX_SHADER, "conv_direct_backward_input_k5s2", &p, &args, grid)
 }
 
 /// `dy` packed as the texture kernels pack an input: dy's channels over the output extent
