@@ -386,8 +386,10 @@ struct BiTexels { a: vec4<f32>, b: vec4<f32> }
 fn bi_texels(lane: u32, kd: u32, t: u32, q: u32) -> BiTexels {
     let kw = (lane & 1u) + 2u * t;
     let x = i32((q / 4u) * 16u + q % 4u);
-    let a = textureLoad(tw, vec2<i32>(x, i32((kd * 5u + lane / 2u) * 5u + kw)));
-    let b = textureLoad(tw, vec2<i32>(x, i32((kd * 5u + 4u) * 5u + kw)));
+    // kw = 5 (odd lanes at t = 2) is past the kernel: its texels are zero, read in bounds.
+    let kc = min(kw, 4u);
+    let a = textureLoad(tw, vec2<i32>(x, i32((kd * 5u + lane / 2u) * 5u + kc)));
+    let b = textureLoad(tw, vec2<i32>(x, i32((kd * 5u + 4u) * 5u + kc)));
     return BiTexels(select(vec4<f32>(0.0), a, kw < 5u), select(vec4<f32>(0.0), b, kw < 5u));
 }
 
