@@ -475,8 +475,9 @@ fn backward_weight_tex(
 /// (on lavapipe 22.3 a loop over the 8 lanes each), so more chunks spread the tiles over more
 /// threads but cost more in the sum. On a CPU adapter 16 tiles per CPU thread (lavapipe runs
 /// one thread per CPU): on a 2-core AMD EPYC Zen 3 this took the weight gradients of the tiny
-/// preset's training shapes 15-28% faster than the 128-256 tiles before (README "Fewer chunks
-/// in the weight gradients"), and left the large ones unchanged; elsewhere `gpu_tiles`.
+/// preset's training shapes 5-26% faster (medians) than the 128-256 tiles before (README
+/// "Fewer chunks in the weight gradients") and left the large ones unchanged; elsewhere
+/// `gpu_tiles`.
 fn weight_tiles(gpu: &Gpu, gpu_tiles: usize) -> usize {
     if gpu.info.device_type != wgpu::DeviceType::Cpu {
         return gpu_tiles;
