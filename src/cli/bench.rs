@@ -164,7 +164,8 @@ fn cases(gpu: &Gpu, choice: &str) -> Result<Vec<Case>> {
     v.extend(conv_cases(gpu, "conv3d", "1->8 5^3 s2 on 64^3, batch 1", c5, &[1, 1, 64, 64, 64], &[8, 1, 5, 5, 5], choice)?);
     v.extend(conv_cases(gpu, "conv2d", "16->3 3x3 on 128x128, batch 1", c2, &[1, 16, 128, 128], &[3, 16, 3, 3], choice)?);
     v.extend(conv_cases(gpu, "conv2d", "16->5 3x3 on 128x128, batch 1", c2, &[1, 16, 128, 128], &[5, 16, 3, 3], choice)?);
-    // The tiny preset's 3D convs as a training step on a 64x64 patch runs them.
+    // The tiny preset's first two 3D convs and a 2D residual conv, at the sizes a training
+    // step on a 64x64 patch runs them.
     v.extend(conv_cases(gpu, "conv3d", "1->8 5^3 s2 on 64x32x32, batch 1", c5, &[1, 1, 64, 32, 32], &[8, 1, 5, 5, 5], choice)?);
     v.extend(conv_cases(gpu, "conv2d", "32->32 3x3 on 32x32, batch 1", c2, &[1, 32, 32, 32], &[32, 32, 3, 3], choice)?);
     let c3s = Conv::conv3d([3, 3, 3], [2, 1, 1], Padding::Same);

@@ -451,11 +451,7 @@ fn backward_weight_tex(
     let g = &f.g;
     let taps = volume(g.kernel);
     let groups = (taps * cpad / 4).div_ceil(8) * (copad / 16);
-    // Chunks of output rows (see `weight_tiles`), never more chunks than rows.
-    let rows = g.n * g.output[0] * g.output[1];
-    let nchunks = weight_tiles(gpu, 128).div_ceil(groups).clamp(1, rows);
-    let chunk = rows.div_ceil(nchunks);
-    let nchunks = rows.div_ceil(chunk);
+    let (chunk, nchunks) = weight_chunks(gpu, g.n * g.output[0] * g.output[1], groups, 128);
     let part = gpu.scratch(&[nchunks, taps, cpad, copad])?;
     let tiles = nchunks * groups;
     let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, total: tiles as u32, ..params(g, cpad) };
@@ -470,19 +466,25 @@ fn backward_weight_tex(
     dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
 }
 
-/// How many tiles a weight-gradient dispatch aims for, splitting the output rows into chunks:
-/// each chunk adds a partial sum that `conv_fast_weight_sum` reads back with storage loads
-/// (on lavapipe 22.3 a loop over the 8 lanes each), so more chunks spread the tiles over more
-/// threads but cost more in the sum. On a CPU adapter 16 tiles per CPU thread (lavapipe runs
-/// one thread per CPU): on a 2-core AMD EPYC Zen 3 this took the weight gradients of the tiny
-/// preset's training shapes 5-26% faster (medians) than the 128-256 tiles before (README
-/// "Fewer chunks in the weight gradients") and left the large ones unchanged; elsewhere
+/// The chunks of `rows` output rows a weight-gradient dispatch of `per_chunk` tiles a chunk
+/// splits them into, as (rows a chunk, chunks); never more chunks than rows. Each chunk adds a
+/// partial sum that `conv_fast_weight_sum` reads back with storage loads (on lavapipe 22.3 a
+/// loop over the 8 lanes each), so more chunks spread the tiles over more threads but cost
+/// more in the sum. On a CPU adapter the dispatch aims at 16 tiles per CPU thread (lavapipe
+/// runs one thread per CPU): on a 2-core AMD EPYC Zen 3 this took the weight gradients of the
+/// tiny preset's training shapes 5-26% faster (medians) than the 128-256 tiles before (README
+/// "Fewer chunks in the weight gradients") and left the large ones unchanged; elsewhere at
 /// `gpu_tiles`.
-fn weight_tiles(gpu: &Gpu, gpu_tiles: usize) -> usize {
-    if gpu.info.device_type != wgpu::DeviceType::Cpu {
-        return gpu_tiles;
-    }
-    16 * std::thread::available_parallelism().map_or(2, |n| n.get())
+fn weight_chunks(gpu: &Gpu, rows: usize, per_chunk: usize, gpu_tiles: usize) -> (usize, usize) {
+    // Read once: on Linux the thread count comes from cgroup files, and this runs per recording.
+    static CPU_TILES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    let tiles = if gpu.info.device_type == wgpu::DeviceType::Cpu {
+        *CPU_TILES.get_or_init(|| 16 * std::thread::available_parallelism().map_or(2, |n| n.get()))
+    } else {
+        gpu_tiles
+    };
+    let chunk = rows.div_ceil(tiles.div_ceil(per_chunk).clamp(1, rows));
+    (chunk, rows.div_ceil(chunk))
 }
 
 /// The weight gradient of a conv the texture family would fold (few input channels), without
@@ -495,10 +497,7 @@ fn backward_weight_direct(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geome
     let k5 = g.kernel[1] == 5 && g.kernel[2] == 5;
     let (entry, nkh, nkw) = if k5 { ("conv_direct_backward_weight_k5", 1, 1) } else { ("conv_direct_backward_weight", g.kernel[1], g.kernel[2].div_ceil(4)) };
     let cols = g.kernel[0] * g.ci * nkh * nkw * g.co.div_ceil(8);
-    // Chunks of output rows (see `weight_tiles`), never more chunks than rows.
-    let rows = g.n * g.output[0] * g.output[1];
-    let chunk = rows.div_ceil(weight_tiles(gpu, 256).div_ceil(cols).clamp(1, rows));
-    let nchunks = rows.div_ceil(chunk);
+    let (chunk, nchunks) = weight_chunks(gpu, g.n * g.output[0] * g.output[1], cols, 256);
     let part = gpu.scratch(&[nchunks, volume(g.kernel), cpad, g.co.div_ceil(16) * 16])?;
     let tiles = nchunks * cols;
     let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, total: tiles as u32, ..p };
