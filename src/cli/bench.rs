@@ -173,19 +173,28 @@ fn cases(gpu: &Gpu, choice: &str) -> Result<Vec<Case>> {
     Ok(v)
 }
 
-/// What every row carries besides its own timing: where it ran and the same-run ceiling.
+/// What every row carries besides its own timing: where it ran, and the FMA probe that is
+/// timed between the row's samples.
 struct Machine {
     adapter: String,
     cpu: Option<String>,
-    ceiling: f64,
+    probe: bench::FmaProbe,
+    clock: Clock,
 }
 
 impl Machine {
-    fn row(&self, op: &str, shape: &str, pass: &str, kernel: &str, ms: f64, gflops: f64) -> serde_json::Value {
+    /// One ceiling sample, taken between a row's samples: the row is divided by the median of
+    /// its own, so a machine that speeds up or slows down during the run moves both alike.
+    fn ceiling_sample(&self, gpu: &Gpu) -> Result<f64> {
+        self.probe.sample_row(gpu, self.clock)
+    }
+
+    fn row(&self, op: &str, shape: &str, pass: &str, kernel: &str, ms: f64, gflops: f64, ceiling: f64) -> serde_json::Value {
         serde_json::json!({
             "op": op, "shape": shape, "pass": pass, "kernel": kernel,
             "ms": finite(ms), "gflops": finite(gflops),
-            "fraction_of_fma_ceiling": finite(gflops / self.ceiling),
+            "fma_ceiling_gflops": finite(ceiling),
+            "fraction_of_fma_ceiling": finite(gflops / ceiling),
             "adapter": self.adapter, "cpu": self.cpu,
         })
     }
@@ -217,17 +226,19 @@ fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine, profile: bool) -> Result<Ve
         };
         let stats = step(&mut ex)?; // pipelines compile on first use
         let mut ms = Vec::new();
+        let mut ceilings = Vec::new();
         let mut again = stats;
         for _ in 0..repeat.max(1) {
+            ceilings.push(m.ceiling_sample(gpu)?);
             let t = std::time::Instant::now();
             again = step(&mut ex)?;
             ms.push(t.elapsed().as_secs_f64() * 1e3);
         }
-        let ms = bench::median(&ms);
+        let (ms, ceiling) = (bench::median(&ms), bench::median(&ceilings));
         let gflops = flops / (ms * 1e6);
         let (ih, iw) = (p.image_for(win[0]), p.image_for(win[1]));
         let shape = format!("{} {}^3 grid, {ih}x{iw} image{what}, batch 1", p.name, p.input);
-        let mut json = m.row("rendernet", &shape, pass, "auto", ms, gflops);
+        let mut json = m.row("rendernet", &shape, pass, "auto", ms, gflops, ceiling);
         // Later runs may make fewer: a frozen network's weights stay packed (gpu/constant.rs).
         json["dispatches"] = again.dispatches.into();
         json["first_run_dispatches"] = stats.dispatches.into();
@@ -237,8 +248,8 @@ fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine, profile: bool) -> Result<Ve
         json["scratch_bytes"] = stats.scratch_bytes.into();
         json["created_per_step"] = again.created.into();
         let text = format!(
-            "{:<17} {:<34} {:<16} {:<9} {ms:>10.1} {gflops:>9.2} {:>8.1}%  ({} dispatches ({} in the first run), {} submit, {} GPU objects created after the first run, pool {:.1} MiB for {:.1} MiB of tensors, scratch {:.1} MiB)",
-            "rendernet", shape, pass, "auto", 100.0 * gflops / m.ceiling, again.dispatches, stats.dispatches, stats.submits, again.created,
+            "{:<17} {:<34} {:<16} {:<9} {ms:>10.1} {gflops:>9.2} {:>8.1}% {:>9.1}  ({} dispatches ({} in the first run), {} submit, {} GPU objects created after the first run, pool {:.1} MiB for {:.1} MiB of tensors, scratch {:.1} MiB)",
+            "rendernet", shape, pass, "auto", 100.0 * gflops / ceiling, ceiling, again.dispatches, stats.dispatches, stats.submits, again.created,
             stats.pool_bytes as f64 / 1048576.0, stats.tensor_bytes as f64 / 1048576.0, stats.scratch_bytes as f64 / 1048576.0
         );
         if profile {
@@ -301,13 +312,15 @@ pub fn run(a: BenchArgs) -> Result<()> {
     if let Some(f) = &a.filter {
         all.retain(|c| c.op.contains(f.as_str()) || c.shape.contains(f.as_str()));
     }
-    let m = Machine { adapter: gpu.info.name.clone(), cpu: bench::cpu_model(), ceiling: bench::fma_ceiling(&gpu, clock, 5)? };
+    let start = bench::fma_ceiling(&gpu, clock, 5)?;
+    let m = Machine { adapter: gpu.info.name.clone(), cpu: bench::cpu_model(), probe: bench::FmaProbe::new(&gpu, clock)?, clock };
     if !a.json {
         let how = if clock == Clock::Gpu { "GPU timestamps" } else { "wall time" };
         println!("adapter: {} ({how}; median of {} samples)", m.adapter, a.repeat);
         println!("cpu:     {}", m.cpu.as_deref().unwrap_or("unknown"));
-        println!("FMA ceiling (shaders/bench_fma.wgsl, best of 5): {:.1} GFLOP/s", m.ceiling);
-        println!("{:<17} {:<34} {:<16} {:<9} {:>10} {:>9} {:>9}", "op", "shape", "pass", "kernel", "ms", "GFLOP/s", "ceiling");
+        println!("FMA ceiling (shaders/bench_fma.wgsl, best of 5): {start:.1} GFLOP/s at the start; each row is divided by");
+        println!("the median of the ceilings timed between its own samples (last column, GFLOP/s)");
+        println!("{:<17} {:<34} {:<16} {:<9} {:>10} {:>9} {:>9} {:>9}", "op", "shape", "pass", "kernel", "ms", "GFLOP/s", "ceiling", "its GF/s");
     }
     let mut json = Vec::new();
     // Cases of one (op, shape, pass) are sampled in turn, so kernels compared see the same load.
@@ -327,22 +340,25 @@ pub fn run(a: BenchArgs) -> Result<()> {
             calls.push(bench::calls_for(once, 200.0));
         }
         let mut samples = vec![Vec::new(); group.len()];
+        let mut ceilings = Vec::new();
         for _ in 0..a.repeat.max(1) {
+            ceilings.push(m.ceiling_sample(&gpu)?);
             for (k, c) in group.iter_mut().enumerate() {
                 let (g, rec) = (&gpu, &mut c.record);
                 samples[k].push(bench::time_calls_reusing(&gpu, &mut memos[k], clock, calls[k], &mut |p| rec(g, p))?);
             }
         }
+        let ceiling = bench::median(&ceilings);
         for (k, c) in group.iter().enumerate() {
             let ms = bench::median(&samples[k]);
             let gflops = c.flops / (ms * 1e6);
             let pass = pass_name(c.pass);
             if a.json {
-                json.push(m.row(c.op, &c.shape, pass, c.kernel, ms, gflops));
+                json.push(m.row(c.op, &c.shape, pass, c.kernel, ms, gflops, ceiling));
             } else {
                 println!(
-                    "{:<17} {:<34} {:<16} {:<9} {ms:>10.3} {gflops:>9.2} {:>8.1}%",
-                    c.op, c.shape, pass, c.kernel, 100.0 * gflops / m.ceiling
+                    "{:<17} {:<34} {:<16} {:<9} {ms:>10.3} {gflops:>9.2} {:>8.1}% {ceiling:>9.1}",
+                    c.op, c.shape, pass, c.kernel, 100.0 * gflops / ceiling
                 );
             }
         }
@@ -357,13 +373,13 @@ pub fn run(a: BenchArgs) -> Result<()> {
             }
         }
     }
-    // The ceiling again at the end, reported beside the first (which the rows are divided
-    // by): how much the machine's speed moved over the run.
+    // The ceiling again at the end, reported beside the first: how much the machine's speed
+    // moved over the run.
     let after = bench::fma_ceiling(&gpu, clock, 5)?;
     if a.json {
         let out = serde_json::json!({
             "adapter": m.adapter, "cpu": m.cpu,
-            "fma_ceiling_gflops": finite(m.ceiling), "fma_ceiling_at_end_gflops": finite(after),
+            "fma_ceiling_gflops": finite(start), "fma_ceiling_at_end_gflops": finite(after),
             "rows": json,
         });
         println!("{}", serde_json::to_string_pretty(&out).map_err(|e| rendernet::Error::Invalid(e.to_string()))?);
