@@ -116,8 +116,8 @@ const FMA_FLOPS_PER_ITER: f64 = 8.0 * 4.0 * 4.0 * 2.0;
 
 /// `shaders/bench_fma.wgsl` (nothing but independent FMAs) ready to be timed again and again:
 /// what this adapter reaches at all, for reading kernel speeds as a fraction of it. `bench`
-/// times it between a kernel's samples too, since this VM's speed moves by a third within a
-/// run (README "Benchmarks").
+/// times it between a kernel's samples too, since a VM's speed moves within a run (rows'
+/// ceilings of 51-99 GFLOP/s in one run on an AMD Zen 3; README "Benchmarks").
 pub struct FmaProbe {
     out: crate::gpu::Tensor,
     params: FmaParams,
