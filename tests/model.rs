@@ -425,8 +425,8 @@ fn training_steps_after_the_first_create_no_gpu_objects() {
 }
 
 /// `Executor::profile` times every op of a run in schedule order: each forward node, then
-/// the backward of the nodes on the loss's path (loss first), then Adam; it changes no result,
-/// and turning it off leaves no times behind.
+/// the backward of the nodes on the loss's path (loss first), then Adam; it changes no result
+/// and no dispatch count, and turning it off leaves no times behind.
 #[test]
 fn profiled_runs_time_every_op_in_schedule_order() {
     use rendernet::graph::{Executor, profile::by_kind};
@@ -439,6 +439,8 @@ fn profiled_runs_time_every_op_in_schedule_order() {
     let net = RenderNet::build(&Preset::nano(), Head::Phong(phong_of(&Light::default())), 1, [16, 16], true).unwrap();
     let mut ex = Executor::new(&gpu, net.graph.clone(), 5).unwrap();
     ex.keep(net.image);
+    ex.train_step(&gpu, net.loss.unwrap(), &Adam::new(1e-3)).unwrap();
+    let unprofiled = ex.train_step(&gpu, net.loss.unwrap(), &Adam::new(1e-3)).unwrap().dispatches;
     ex.forward(&gpu).unwrap();
     let plain = ex.read(&gpu, net.image).unwrap();
     ex.profile(&gpu, true).unwrap();
@@ -450,6 +452,8 @@ fn profiled_runs_time_every_op_in_schedule_order() {
     let kinds: Vec<&str> = ex.op_times().iter().map(|t| t.kind.as_str()).collect();
     assert_eq!(kinds, net.graph.nodes().iter().map(|n| n.op.name()).collect::<Vec<_>>());
     let stats = ex.train_step(&gpu, net.loss.unwrap(), &Adam::new(1e-3)).unwrap();
+    // The profiler's own empty dispatches (after each timestamp) are nobody's work.
+    assert_eq!(stats.dispatches, unprofiled, "profiling changed the step's dispatch count");
     let t = ex.op_times();
     // Every dispatch of the step is counted against one op, and every op dispatches.
     assert_eq!(t.iter().map(|t| t.dispatches).sum::<u64>(), stats.dispatches, "{t:?}");

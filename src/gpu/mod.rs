@@ -87,6 +87,11 @@ impl Gpu {
         DISPATCHES.with(|c| c.set(c.get() + 1));
     }
 
+    /// Takes back `n` counted dispatches: the profiler's own, which are no op's work.
+    pub(crate) fn uncount_dispatches(&self, n: u64) {
+        DISPATCHES.with(|c| c.set(c.get() - n));
+    }
+
     /// Queue submits (each followed by a wait) made by the calling thread, on any device: a
     /// step's count is then its own even while other threads share the device.
     pub fn submit_count(&self) -> u64 {

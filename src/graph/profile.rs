@@ -2,6 +2,13 @@
 //! written inside the run's one compute pass, so the times are those of the real schedule
 //! (same encoder, same scratch reuse), not of ops run one by one.
 //!
+//! lavapipe (Mesa 22.3.6) writes a timestamp at the next point where the pass has to wait,
+//! not where it was recorded: an op whose successor starts with work that does not read its
+//! output was stamped late, and the first op (the resampling, a third of a 128x128 forward)
+//! read 0 ms, the ops adding to 67-81% of the wall time. So two empty dispatches on one
+//! buffer follow each timestamp: the second waits for the first, and the pass stops there
+//! (the ops then add to 89-109% of the wall time; README "Where a step spends its time").
+//!
 //! [`Executor::profile`]: super::Executor::profile
 
 use crate::error::{Error, Result};
@@ -32,6 +39,8 @@ pub(crate) struct Profiler {
     marks: Vec<(String, String, u64)>,
     /// The device's dispatch count at the last timestamp.
     dispatched: u64,
+    /// What the empty dispatches after each timestamp write.
+    sink: crate::gpu::Tensor,
 }
 
 /// wgpu's limit on the queries of one set.
@@ -51,7 +60,8 @@ impl Profiler {
         let size = cap as u64 * 8;
         let resolve = gpu.new_buffer("profile resolve", size, wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
         let staging = gpu.new_buffer("profile readback", size, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
-        Ok(Profiler { set, cap, resolve, staging, marks: Vec::new(), dispatched: 0 })
+        let sink = crate::gpu::Tensor::zeros(gpu, &[64])?;
+        Ok(Profiler { set, cap, resolve, staging, marks: Vec::new(), dispatched: 0, sink })
     }
 
     /// The first timestamp of a run.
@@ -59,6 +69,26 @@ impl Profiler {
         self.marks.clear();
         self.dispatched = gpu.dispatch_count();
         pass.write_timestamp(&self.set, 0);
+        self.settle(gpu, pass);
+    }
+
+    /// Two empty dispatches on one buffer, the second waiting for the first: lavapipe writes
+    /// the timestamp just recorded there. Not counted as dispatches of any op or step.
+    fn settle(&self, gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>) {
+        #[repr(C)]
+        #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+        struct Params {
+            iters: u32,
+            total: u32,
+        }
+        const EMPTY: crate::gpu::Shader = crate::gpu::wgsl!("bench_fma");
+        let params = Params { iters: 0, total: 64 };
+        for _ in 0..2 {
+            // Only fails on limits, which one workgroup and a 64-float buffer cannot pass.
+            if gpu.dispatch(pass, EMPTY, "bench_fma", &params, &[crate::gpu::Arg::W(&self.sink)], [1, 1, 1]).is_ok() {
+                gpu.uncount_dispatches(1);
+            }
+        }
     }
 
     /// A timestamp after the op just recorded; ops past the set's capacity are not timed.
@@ -66,6 +96,7 @@ impl Profiler {
         let i = self.marks.len() as u32 + 1;
         if i < self.cap {
             pass.write_timestamp(&self.set, i);
+            self.settle(gpu, pass);
             let now = gpu.dispatch_count();
             self.marks.push((name, kind.to_string(), now - self.dispatched));
             self.dispatched = now;
