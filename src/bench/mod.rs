@@ -122,6 +122,7 @@ pub struct FmaProbe {
     out: crate::gpu::Tensor,
     params: FmaParams,
     grid: [u32; 3],
+    clock: Clock,
     /// Calls per [`FmaProbe::sample_row`]: about 50 ms of them.
     calls: u32,
 }
@@ -136,56 +137,70 @@ struct FmaParams {
 const FMA_SHADER: crate::gpu::Shader = crate::gpu::wgsl!("bench_fma");
 
 impl FmaProbe {
-    /// Allocates the kernel's output and compiles it (llvmpipe compiles at first dispatch).
+    /// Allocates the kernel's output and compiles it (llvmpipe compiles at first dispatch);
+    /// samples are timed by `clock`.
     pub fn new(gpu: &Gpu, clock: Clock) -> Result<Self> {
         let params = FmaParams { iters: 1024, total: 16384 };
         let mut probe = Self {
             out: crate::gpu::Tensor::zeros(gpu, &[params.total as usize])?,
             params,
             grid: crate::gpu::grid_1d(params.total as u64, 64)?,
+            clock,
             calls: 1,
         };
-        probe.sample(gpu, clock, 1)?;
-        let flops = params.total as f64 * params.iters as f64 * FMA_FLOPS_PER_ITER;
-        probe.calls = calls_for(flops / (probe.sample(gpu, clock, 1)? * 1e6), 50.0);
+        probe.sample(gpu, 1)?;
+        probe.calls = calls_for(probe.flops() / (probe.sample(gpu, 1)? * 1e6), 50.0);
         Ok(probe)
+    }
+
+    /// FLOPs of one call.
+    fn flops(&self) -> f64 {
+        self.params.total as f64 * self.params.iters as f64 * FMA_FLOPS_PER_ITER
     }
 
     /// One sample of about 50 ms (1 call on lavapipe, 64 on a large GPU), in GFLOP/s: what
     /// `bench` times between a row's samples.
-    pub fn sample_row(&self, gpu: &Gpu, clock: Clock) -> Result<f64> {
-        self.sample(gpu, clock, self.calls)
+    pub fn sample_row(&self, gpu: &Gpu) -> Result<f64> {
+        self.sample(gpu, self.calls)
+    }
+
+    /// The best of `samples` timings of 4 calls, in GFLOP/s: the ceiling a run reports.
+    pub fn best(&self, gpu: &Gpu, samples: usize) -> Result<f64> {
+        let mut best = 0.0f64;
+        for _ in 0..samples.max(1) {
+            best = best.max(self.sample(gpu, 4)?);
+        }
+        Ok(best)
     }
 
     /// GFLOP/s of one timing of `calls` calls in one pass.
-    pub fn sample(&self, gpu: &Gpu, clock: Clock, calls: u32) -> Result<f64> {
+    fn sample(&self, gpu: &Gpu, calls: u32) -> Result<f64> {
         use crate::gpu::Arg;
         let mut record = |pass: &mut wgpu::ComputePass<'_>| gpu.dispatch(pass, FMA_SHADER, "bench_fma", &self.params, &[Arg::W(&self.out)], self.grid);
-        let ms = time_calls(gpu, clock, calls, &mut record)?;
-        Ok(self.params.total as f64 * self.params.iters as f64 * FMA_FLOPS_PER_ITER / (ms * 1e6))
+        Ok(self.flops() / (time_calls(gpu, self.clock, calls, &mut record)? * 1e6))
     }
 }
 
 /// The adapter's FMA ceiling in GFLOP/s: the best of `samples` timings of [`FmaProbe`].
 pub fn fma_ceiling(gpu: &Gpu, clock: Clock, samples: usize) -> Result<f64> {
-    let probe = FmaProbe::new(gpu, clock)?;
-    let mut best = 0.0f64;
-    for _ in 0..samples.max(1) {
-        best = best.max(probe.sample(gpu, clock, 4)?);
-    }
-    Ok(best)
+    FmaProbe::new(gpu, clock)?.best(gpu, samples)
 }
 
-/// Microseconds one (almost) empty dispatch takes on the device, the best of `samples`
-/// timings of 256 of them in one pass: `bench_fma` with no iterations on one workgroup. On
-/// lavapipe this is the thread pool's wake-up and wait around every dispatch, whatever the
-/// dispatch computes (see README "Benchmarks").
+/// Records one (almost) empty dispatch: `bench_fma` with no iterations on one workgroup,
+/// writing the first 64 floats of `out`. What [`dispatch_cost_us`] times, and what the
+/// profiler puts after each timestamp (graph/profile.rs).
+pub(crate) fn record_empty(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, out: &crate::gpu::Tensor) -> Result<()> {
+    let params = FmaParams { iters: 0, total: 64 };
+    gpu.dispatch(pass, FMA_SHADER, "bench_fma", &params, &[crate::gpu::Arg::W(out)], [1, 1, 1])
+}
+
+/// Microseconds one (almost) empty dispatch ([`record_empty`]) takes on the device, the best
+/// of `samples` timings of 256 of them in one pass. On lavapipe this is the thread pool's
+/// wake-up and wait around every dispatch, whatever the dispatch computes (see README
+/// "Benchmarks").
 pub fn dispatch_cost_us(gpu: &Gpu, clock: Clock, samples: usize) -> Result<f64> {
-    use crate::gpu::{Arg, Shader, Tensor, wgsl};
-    const SHADER: Shader = wgsl!("bench_fma");
-    let out = Tensor::zeros(gpu, &[64])?;
-    let params: [u32; 2] = [0, 64]; // iters, total
-    let mut record = |pass: &mut wgpu::ComputePass<'_>| gpu.dispatch(pass, SHADER, "bench_fma", &params, &[Arg::W(&out)], [1, 1, 1]);
+    let out = crate::gpu::Tensor::zeros(gpu, &[64])?;
+    let mut record = |pass: &mut wgpu::ComputePass<'_>| record_empty(gpu, pass, &out);
     time_calls(gpu, clock, 1, &mut record)?; // compile
     let mut best = f64::INFINITY;
     for _ in 0..samples.max(1) {

@@ -174,21 +174,15 @@ fn cases(gpu: &Gpu, choice: &str) -> Result<Vec<Case>> {
 }
 
 /// What every row carries besides its own timing: where it ran, and the FMA probe that is
-/// timed between the row's samples.
+/// timed between the row's samples (`probe.sample_row`): the row is divided by the median of
+/// its own, so a machine that speeds up or slows down during the run moves both alike.
 struct Machine {
     adapter: String,
     cpu: Option<String>,
     probe: bench::FmaProbe,
-    clock: Clock,
 }
 
 impl Machine {
-    /// One ceiling sample, taken between a row's samples: the row is divided by the median of
-    /// its own, so a machine that speeds up or slows down during the run moves both alike.
-    fn ceiling_sample(&self, gpu: &Gpu) -> Result<f64> {
-        self.probe.sample_row(gpu, self.clock)
-    }
-
     fn row(&self, op: &str, shape: &str, pass: &str, kernel: &str, ms: f64, gflops: f64, ceiling: f64) -> serde_json::Value {
         serde_json::json!({
             "op": op, "shape": shape, "pass": pass, "kernel": kernel,
@@ -229,7 +223,7 @@ fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine, profile: bool) -> Result<Ve
         let mut ceilings = Vec::new();
         let mut again = stats;
         for _ in 0..repeat.max(1) {
-            ceilings.push(m.ceiling_sample(gpu)?);
+            ceilings.push(m.probe.sample_row(gpu)?);
             let t = std::time::Instant::now();
             again = step(&mut ex)?;
             ms.push(t.elapsed().as_secs_f64() * 1e3);
@@ -312,8 +306,8 @@ pub fn run(a: BenchArgs) -> Result<()> {
     if let Some(f) = &a.filter {
         all.retain(|c| c.op.contains(f.as_str()) || c.shape.contains(f.as_str()));
     }
-    let start = bench::fma_ceiling(&gpu, clock, 5)?;
-    let m = Machine { adapter: gpu.info.name.clone(), cpu: bench::cpu_model(), probe: bench::FmaProbe::new(&gpu, clock)?, clock };
+    let m = Machine { adapter: gpu.info.name.clone(), cpu: bench::cpu_model(), probe: bench::FmaProbe::new(&gpu, clock)? };
+    let start = m.probe.best(&gpu, 5)?;
     if !a.json {
         let how = if clock == Clock::Gpu { "GPU timestamps" } else { "wall time" };
         println!("adapter: {} ({how}; median of {} samples)", m.adapter, a.repeat);
@@ -342,7 +336,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
         let mut samples = vec![Vec::new(); group.len()];
         let mut ceilings = Vec::new();
         for _ in 0..a.repeat.max(1) {
-            ceilings.push(m.ceiling_sample(&gpu)?);
+            ceilings.push(m.probe.sample_row(&gpu)?);
             for (k, c) in group.iter_mut().enumerate() {
                 let (g, rec) = (&gpu, &mut c.record);
                 samples[k].push(bench::time_calls_reusing(&gpu, &mut memos[k], clock, calls[k], &mut |p| rec(g, p))?);
@@ -375,7 +369,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
     }
     // The ceiling again at the end, reported beside the first: how much the machine's speed
     // moved over the run.
-    let after = bench::fma_ceiling(&gpu, clock, 5)?;
+    let after = m.probe.best(&gpu, 5)?;
     if a.json {
         let out = serde_json::json!({
             "adapter": m.adapter, "cpu": m.cpu,

@@ -75,17 +75,9 @@ impl Profiler {
     /// Two empty dispatches on one buffer, the second waiting for the first: lavapipe writes
     /// the timestamp just recorded there. Not counted as dispatches of any op or step.
     fn settle(&self, gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>) {
-        #[repr(C)]
-        #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-        struct Params {
-            iters: u32,
-            total: u32,
-        }
-        const EMPTY: crate::gpu::Shader = crate::gpu::wgsl!("bench_fma");
-        let params = Params { iters: 0, total: 64 };
         for _ in 0..2 {
             // Only fails on limits, which one workgroup and a 64-float buffer cannot pass.
-            if gpu.dispatch(pass, EMPTY, "bench_fma", &params, &[crate::gpu::Arg::W(&self.sink)], [1, 1, 1]).is_ok() {
+            if crate::bench::record_empty(gpu, pass, &self.sink).is_ok() {
                 gpu.uncount_dispatches(1);
             }
         }
