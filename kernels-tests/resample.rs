@@ -6,7 +6,7 @@ mod common;
 mod reference;
 use common::*;
 use reference::resample::{self as rref, Dims};
-use rendernet::ops::resample;
+use rendernet::ops::resample::{self, Sampling};
 use std::f64::consts::FRAC_PI_2;
 
 // Non-cubic, odd sizes; output larger than input in D and H, equal in W; C = 2.
@@ -37,20 +37,37 @@ fn case(seed: u64, d: &Dims) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     (x, poses, r)
 }
 
-/// Runs the forward on the GPU.
-fn gpu_forward(d: &Dims, x: &[f64], poses: &[f64]) -> Vec<f64> {
+/// Both ways of reading the grid; lavapipe (the test adapter) reads rgba32f storage textures.
+const SAMPLINGS: [Sampling; 2] = [Sampling::Buffer, Sampling::Texture];
+
+/// Runs the forward on the GPU, reading the grid as `s` says.
+fn gpu_forward_with(d: &Dims, x: &[f64], poses: &[f64], s: Sampling) -> Vec<f64> {
     let (tx, tp, ty) = (upload(&shape(d, d.inp), x), upload(&[d.n, 6], poses), zeros(&shape(d, d.out)));
-    run(|p| resample::forward(gpu(), p, &tx, &tp, &ty));
+    run(|p| resample::forward_with(gpu(), p, &tx, &tp, &ty, s));
     download(&ty)
+}
+
+/// Runs the forward on the GPU as the network does ([`Sampling::Auto`]).
+fn gpu_forward(d: &Dims, x: &[f64], poses: &[f64]) -> Vec<f64> {
+    gpu_forward_with(d, x, poses, Sampling::Auto)
 }
 
 #[test]
 fn forward_matches_reference() {
-    let (x, poses, _) = case(11, &DIMS);
-    let want = rref::forward(&DIMS, &x, &poses);
-    // |x| <= 1: sample points carry f32 rounding ~1e-6 (coordinates < 10), times a trilinear
-    // slope <= 2 per axis, plus f32 sin/cos; 2e-5 leaves ~5x headroom, a wrong tap is ~0.1.
-    assert_close("resample forward", &gpu_forward(&DIMS, &x, &poses), &want, 2e-5, 1e-4);
+    // C = 2 and 5 (the texture path's "quads": one and two texels of 4 channels, the second
+    // partly empty) and C = 1 ("corners": a texel holds 4 corners of a cell).
+    let wide = Dims { n: 2, c: 5, inp: [5, 6, 7], out: [7, 5, 8] };
+    let one = Dims { n: 3, c: 1, inp: [7, 5, 6], out: [9, 8, 7] };
+    for (k, d) in [DIMS, wide, one].iter().enumerate() {
+        let (x, poses, _) = case(11 + 10 * k as u64, d);
+        let want = rref::forward(d, &x, &poses);
+        for s in SAMPLINGS {
+            // |x| <= 1: sample points carry f32 rounding ~1e-6 (coordinates < 10), times a
+            // trilinear slope <= 2 per axis, plus f32 sin/cos; 2e-5 leaves ~5x headroom, a
+            // wrong tap is ~0.1.
+            assert_close(&format!("resample forward {s:?} {:?}", d.out), &gpu_forward_with(d, &x, &poses, s), &want, 2e-5, 1e-4);
+        }
+    }
 }
 
 #[test]
@@ -85,16 +102,36 @@ fn backward_pose_matches_finite_differences() {
     // (If this fails for a new seed, pick another seed rather than loosening anything.)
     let margin = kink_margin(&DIMS, &poses);
     assert!(margin > 1e-4, "seed puts a sample {margin} from a kink; choose another seed");
-    let (tx, tp, tr, tdp) =
-        (upload(&shape(&DIMS, DIMS.inp), &x), upload(&[DIMS.n, 6], &poses), upload(&shape(&DIMS, DIMS.out), &r), zeros(&[DIMS.n, 6]));
-    run(|p| resample::backward_pose(gpu(), p, &tx, &tp, &tr, &tdp));
+    let (tx, tp, tr) = (upload(&shape(&DIMS, DIMS.inp), &x), upload(&[DIMS.n, 6], &poses), upload(&shape(&DIMS, DIMS.out), &r));
     let want = fd_grad(&poses, |p| dot(&r, &rref::forward(&DIMS, &x, p)));
     // Sums of ~1000 voxel terms of size ~1-10 (|dq/dθ| <= |u|/s < 9) with f32 errors ~1e-7
     // relative each, partly cancelling, against gradients of order 1-30: observed errors are
     // ~1e-5, so atol = 1e-5 * max|grad| (~3e-4) leaves ~20x headroom; a dropped or flipped
     // term of any one partial moves it by O(1).
     let scale = want.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    assert_close("resample backward_pose", &download(&tdp), &want, 1e-5 * scale, 1e-4);
+    for s in SAMPLINGS {
+        let tdp = zeros(&[DIMS.n, 6]);
+        run(|p| resample::backward_pose_with(gpu(), p, &tx, &tp, &tr, &tdp, s));
+        assert_close(&format!("resample backward_pose {s:?}"), &download(&tdp), &want, 1e-5 * scale, 1e-4);
+    }
+}
+
+#[test]
+fn backward_pose_reads_both_texture_layouts() {
+    // C = 5: "quads", the second texel holding one channel (a quad skipped or a channel read
+    // from the wrong texel shows); C = 1: "corners" (a corner taken from the wrong component
+    // shows).
+    for (c, seed) in [(5, 16), (1, 17)] {
+        let d = Dims { n: 2, c, inp: [5, 4, 6], out: [6, 5, 4] };
+        let (x, poses, r) = case(seed, &d);
+        assert!(kink_margin(&d, &poses) > 1e-4, "seed puts a sample near a kink; choose another seed");
+        let want = fd_grad(&poses, |p| dot(&r, &rref::forward(&d, &x, p)));
+        let scale = want.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let (tx, tp, tr, tdp) = (upload(&shape(&d, d.inp), &x), upload(&[2, 6], &poses), upload(&shape(&d, d.out), &r), zeros(&[2, 6]));
+        run(|p| resample::backward_pose_with(gpu(), p, &tx, &tp, &tr, &tdp, Sampling::Texture));
+        // Tolerance as backward_pose_matches_finite_differences.
+        assert_close(&format!("resample backward_pose, {c} channels"), &download(&tdp), &want, 1e-5 * scale, 1e-4);
+    }
 }
 
 #[test]
@@ -104,7 +141,9 @@ fn identity_pose_reproduces_input_exactly() {
     let mut rng = Rng(14);
     let x = f32_round(&rng.vec(d.n * d.c * 120, -1.0, 1.0));
     let poses = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0].repeat(d.n);
-    assert_eq!(gpu_forward(&d, &x, &poses), x, "identity forward");
+    for s in SAMPLINGS {
+        assert_eq!(gpu_forward_with(&d, &x, &poses, s), x, "identity forward {s:?}");
+    }
     // The gather's transpose is the identity too: dx = dy exactly.
     let (tp, tdy, tdx) = (upload(&[d.n, 6], &poses), upload(&shape(&d, d.out), &x), zeros(&shape(&d, d.inp)));
     run(|p| resample::backward_input(gpu(), p, &tp, &tdy, &tdx));
@@ -173,4 +212,41 @@ fn bad_shapes_are_errors_not_panics() {
     expect_err("dx batch", g.run(|p| resample::backward_input(g, p, &pose, &y, &zeros(&[1, 1, 3, 3, 3]))), "dx");
     expect_err("dy channels", g.run(|p| resample::backward_pose(g, p, &x, &pose, &zeros(&[2, 3, 4, 4, 4]), &pose)), "dy");
     expect_err("dpose", g.run(|p| resample::backward_pose(g, p, &x, &pose, &y, &zeros(&[2, 5]))), "dpose");
+}
+
+#[test]
+fn a_grid_too_wide_for_a_texture_is_sampled_from_its_buffer() {
+    let limit = gpu().limits.max_texture_dimension_3d as usize;
+    // W + 2 border texels over the limit; tiny otherwise.
+    let d = Dims { n: 1, c: 1, inp: [1, 1, limit - 1], out: [1, 1, 4] };
+    let x: Vec<f64> = (0..limit - 1).map(|i| i as f64).collect();
+    let (tx, tp, ty) = (upload(&shape(&d, d.inp), &x), upload(&[1, 6], &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0]), zeros(&shape(&d, d.out)));
+    let g = gpu();
+    let e = g.run(|p| resample::forward_with(g, p, &tx, &tp, &ty, Sampling::Texture)).expect_err("texture too wide").to_string();
+    assert!(e.contains("max_texture_dimension_3d") && e.contains("resample_forward"), "{e}");
+    // Auto falls back to the buffer: samples at the row's centre -1.5..+1.5, where x (its own
+    // index) interpolates to the sample's coordinate, exactly in f32.
+    run(|p| resample::forward(g, p, &tx, &tp, &ty));
+    let c = (limit - 2) as f64 / 2.0;
+    let want: Vec<f64> = (0..4).map(|k| c - 1.5 + k as f64).collect();
+    assert_eq!(download(&ty), want);
+}
+
+#[test]
+fn a_zero_scale_samples_nothing_rather_than_nan() {
+    // Scale 0 divides by zero (sample points infinite or NaN); an executor's pose input is
+    // zero until set. Both paths must read zeros, not NaN, so nothing poisons a training step.
+    let mut poses = vec![0.0; 12];
+    poses[6] = 1.0; // item 1: identity-like scale 1, for contrast
+    // C = 1 and 2: the texture path's two layouts.
+    for c in [1, 2] {
+        let d = Dims { n: 2, c, inp: [3, 4, 5], out: [4, 3, 8] };
+        let x = vec![1.0; d.n * d.c * 60];
+        for s in SAMPLINGS {
+            let y = gpu_forward_with(&d, &x, &poses, s);
+            let (first, second) = y.split_at(y.len() / 2);
+            assert!(first.iter().all(|&v| v == 0.0), "{s:?}, C = {c}: zero scale gave {first:?}");
+            assert!(second.iter().any(|&v| v > 0.5), "{s:?}, C = {c}: scale 1 gave nothing");
+        }
+    }
 }

@@ -68,9 +68,9 @@ enum Cmd {
     /// renderer's, and chart object and full-frame PSNR against forward milliseconds and
     /// training hours (PNG; table or JSON), RenderNet presets and EC baselines alike.
     Frontier(cli::frontier::FrontierArgs),
-    /// Time the conv, transposed-conv and projection kernels (reference and tiled) on shapes
-    /// from the RenderNet presets: median ms and GFLOP/s per pass, GPU timestamps when the
-    /// adapter has them.
+    /// Time the conv, transposed-conv, projection (reference and tiled) and resampling kernels
+    /// on shapes from the RenderNet presets: median ms and GFLOP/s per pass, GPU timestamps
+    /// when the adapter has them.
     Bench(cli::bench::BenchArgs),
 }
 

@@ -67,6 +67,25 @@ fn bench_json_reports_speed_against_the_same_run_ceiling() {
     }
 }
 
+/// `bench --filter resample`: the resampling's passes per way of reading the grid, the grid
+/// gradient (buffer only) left out when `--kernel` asks for textures alone.
+#[test]
+fn bench_times_the_resampling_both_ways() {
+    let rows = |kernels: &str| {
+        let out = rendernet().args(["bench", "--json", "--filter", "64x32x32", "--kernel", kernels, "--repeat", "1"]).output().unwrap();
+        assert!(out.status.success(), "bench failed: {}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("bench --json prints JSON");
+        let rows = v["rows"].as_array().expect("rows").clone();
+        assert!(rows.iter().all(|r| r["gflops"].as_f64().is_some_and(|g| g > 0.0)), "{v}");
+        // The shape also matches the training-step conv rows; keep the resampling's.
+        let rows: Vec<String> = rows.iter().filter(|r| r["op"] == "resample").map(|r| format!("{} {}", r["pass"].as_str().unwrap(), r["kernel"].as_str().unwrap())).collect();
+        rows
+    };
+    let both = ["forward fast", "forward texture", "backward_input fast", "backward_pose fast", "backward_pose texture"];
+    assert_eq!(rows("fast,texture"), both);
+    assert_eq!(rows("texture"), ["forward texture", "backward_pose texture"]);
+}
+
 /// `bench --operands --json`: one row per kind of operand, the plain FMA first with nothing
 /// beyond itself, every cost finite and positive, and each row's extra cost counted in
 /// ceiling FMAs by one same-run factor, an empty dispatch's cost beside them; with --filter

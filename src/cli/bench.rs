@@ -1,5 +1,5 @@
-//! `rendernet bench`: times the conv, transposed-conv and projection kernels on shapes from
-//! the RenderNet presets and reports GFLOP/s per (op, shape, pass, kernel).
+//! `rendernet bench`: times the conv, transposed-conv, projection and resampling kernels on
+//! shapes from the RenderNet presets and reports GFLOP/s per (op, shape, pass, kernel).
 
 use clap::Args;
 use rendernet::bench::{self, Clock};
@@ -7,6 +7,7 @@ use rendernet::gpu::Memo;
 use rendernet::ops::conv::{Conv, ConvKernel, Padding, Pass};
 use rendernet::ops::conv_transpose::ConvTranspose;
 use rendernet::ops::projection;
+use rendernet::ops::resample::{self, Sampling};
 use rendernet::graph::profile::by_kind;
 use rendernet::graph::{Executor, OpTime};
 use rendernet::nn::rendernet::{Head, Preset, RenderNet, phong_of};
@@ -29,7 +30,8 @@ pub struct BenchArgs {
     repeat: usize,
     /// Which conv kernels, comma-separated: reference (one output per invocation), fast
     /// (tiled, storage buffers), texture (tiled, textures + subgroup shuffles), or all.
-    /// Kernels of one case are sampled in turn, so they see the same machine load.
+    /// For the resampling rows, fast reads the grid from its storage buffer, texture from a
+    /// texture. Kernels of one case are sampled in turn, so they see the same machine load.
     #[arg(long, default_value = "all")]
     kernel: String,
     /// After the whole-network rows, time every op of one run of each (GPU timestamps between
@@ -53,7 +55,7 @@ type Recorder = Box<dyn FnMut(&Gpu, &mut wgpu::ComputePass<'_>) -> Result<()>>;
 struct Case {
     op: &'static str,
     shape: String,
-    pass: Pass,
+    pass: &'static str,
     kernel: &'static str,
     flops: f64,
     record: Recorder,
@@ -95,7 +97,7 @@ fn conv_cases(gpu: &Gpu, op: &'static str, shape: &str, c: Conv, xs: &[usize], w
                 Pass::BackwardInput => Box::new(move |g, p| c.backward_input(k, g, p, &y, &w, &x)),
                 Pass::BackwardWeight => Box::new(move |g, p| c.backward_weight(k, g, p, &x, &y, &w)),
             };
-            out.push(Case { op, shape: shape.into(), pass, kernel: name, flops, record });
+            out.push(Case { op, shape: shape.into(), pass: pass_name(pass), kernel: name, flops, record });
         }
     }
     Ok(out)
@@ -120,7 +122,7 @@ fn transposed_cases(gpu: &Gpu, shape: &str, t: ConvTranspose, xs: &[usize], ws: 
                 Pass::BackwardInput => Box::new(move |g, p| t.backward_input(k, g, p, &y, &w, &x)),
                 Pass::BackwardWeight => Box::new(move |g, p| t.backward_weight(k, g, p, &x, &y, &w)),
             };
-            out.push(Case { op: "conv_transpose2d", shape: shape.into(), pass, kernel: name, flops, record });
+            out.push(Case { op: "conv_transpose2d", shape: shape.into(), pass: pass_name(pass), kernel: name, flops, record });
         }
     }
     Ok(out)
@@ -142,10 +144,45 @@ fn projection_cases(gpu: &Gpu, choice: &str) -> Result<Vec<Case>> {
                 Pass::BackwardInput => Box::new(move |g, p| projection::backward_input(kern, g, p, &y, &wt, &x)),
                 Pass::BackwardWeight => Box::new(move |g, p| projection::backward_weight(kern, g, p, &x, &y, &wt)),
             };
-            out.push(Case { op: "projection", shape: shape.clone(), pass, kernel: name, flops, record });
+            out.push(Case { op: "projection", shape: shape.clone(), pass: pass_name(pass), kernel: name, flops, record });
         }
     }
     Ok(out)
+}
+
+/// The tiny preset's resampling of a 1-channel 32^3 grid into the camera grid `out` under a
+/// turned pose: forward and pose gradient from the buffer (`fast`) or a texture (`texture`),
+/// and the grid gradient (buffer only). FLOPs: 8 multiply-adds per sampled value (its
+/// trilinear sum), though a sample also costs 8 loads and its weights.
+fn resample_cases(gpu: &Gpu, out: [usize; 3], choice: &str) -> Result<Vec<Case>> {
+    let xs = [1, 1, 32, 32, 32];
+    let ys = [1, 1, out[0], out[1], out[2]];
+    let (x, dx) = (Tensor::zeros(gpu, &xs)?, Tensor::zeros(gpu, &xs)?);
+    let (y, dpose) = (Tensor::zeros(gpu, &ys)?, Tensor::zeros(gpu, &[1, 6])?);
+    // Non-zero dy: the buffer path skips voxels whose dy is zero.
+    let dy = Tensor::from_slice(gpu, &ys, &vec![1.0; ys.iter().product()])?;
+    let pose = Tensor::from_slice(gpu, &[1, 6], &resample::pose_from_view(30.0, 60.0, 3.3))?;
+    let flops = 16.0 * ys.iter().product::<usize>() as f64;
+    let shape = format!("1ch 32^3 -> {}x{}x{}, batch 1", out[0], out[1], out[2]);
+    let ways = [("fast", Sampling::Buffer), ("texture", Sampling::Texture)];
+    let ways: Vec<_> = ways.into_iter().filter(|(n, _)| choice == "all" || choice.split(',').any(|c| c.trim() == *n)).collect();
+    let mut v = Vec::new();
+    for &(name, s) in &ways {
+        let (x, pose, y) = (x.clone(), pose.clone(), y.clone());
+        let record: Recorder = Box::new(move |g, p| resample::forward_with(g, p, &x, &pose, &y, s));
+        v.push(Case { op: "resample", shape: shape.clone(), pass: "forward", kernel: name, flops, record });
+    }
+    if ways.iter().any(|w| w.1 == Sampling::Buffer) {
+        let (pose, dy) = (pose.clone(), dy.clone());
+        let record: Recorder = Box::new(move |g, p| resample::backward_input(g, p, &pose, &dy, &dx));
+        v.push(Case { op: "resample", shape: shape.clone(), pass: "backward_input", kernel: "fast", flops, record });
+    }
+    for &(name, s) in &ways {
+        let (x, pose, dy, dpose) = (x.clone(), pose.clone(), dy.clone(), dpose.clone());
+        let record: Recorder = Box::new(move |g, p| resample::backward_pose_with(g, p, &x, &pose, &dy, &dpose, s));
+        v.push(Case { op: "resample", shape: shape.clone(), pass: "backward_pose", kernel: name, flops, record });
+    }
+    Ok(v)
 }
 
 /// The fixed shape list, from the RenderNet presets (see the README's Benchmarks section).
@@ -170,6 +207,9 @@ fn cases(gpu: &Gpu, choice: &str) -> Result<Vec<Case>> {
     v.extend(conv_cases(gpu, "conv2d", "32->32 3x3 on 32x32, batch 1", c2, &[1, 32, 32, 32], &[32, 32, 3, 3], choice)?);
     let c3s = Conv::conv3d([3, 3, 3], [2, 1, 1], Padding::Same);
     v.extend(conv_cases(gpu, "conv3d", "8->16 3^3 s2x1x1 on 32x16x16, batch 1", c3s, &[1, 8, 32, 16, 16], &[16, 8, 3, 3, 3], choice)?);
+    // The tiny preset's first op, for a 128x128 image and a 64x64 training patch.
+    v.extend(resample_cases(gpu, [64, 64, 64], choice)?);
+    v.extend(resample_cases(gpu, [64, 32, 32], choice)?);
     Ok(v)
 }
 
@@ -346,7 +386,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
         for (k, c) in group.iter().enumerate() {
             let ms = bench::median(&samples[k]);
             let gflops = c.flops / (ms * 1e6);
-            let pass = pass_name(c.pass);
+            let pass = c.pass;
             if a.json {
                 json.push(m.row(c.op, &c.shape, pass, c.kernel, ms, gflops, ceiling));
             } else {
