@@ -55,10 +55,14 @@ fn gpu_forward(d: &Dims, x: &[f64], poses: &[f64]) -> Vec<f64> {
 #[test]
 fn forward_matches_reference() {
     // C = 2 and 5 (the texture path's "quads": one and two texels of 4 channels, the second
-    // partly empty) and C = 1 ("corners": a texel holds 4 corners of a cell).
+    // partly empty) and C = 1 ("corners": a texel holds 4 corners of a cell). Input W a
+    // multiple of 4 as well: the staging then reads vec4s (`w4`), and from a tensor of 64 KiB
+    // or more on lavapipe, uniform windows (`big`).
     let wide = Dims { n: 2, c: 5, inp: [5, 6, 7], out: [7, 5, 8] };
     let one = Dims { n: 3, c: 1, inp: [7, 5, 6], out: [9, 8, 7] };
-    for (k, d) in [DIMS, wide, one].iter().enumerate() {
+    let w4 = Dims { n: 2, c: 2, inp: [5, 3, 8], out: [6, 7, 9] };
+    let big = Dims { n: 2, c: 1, inp: [16, 32, 32], out: [9, 10, 12] };
+    for (k, d) in [DIMS, wide, one, w4, big].iter().enumerate() {
         let (x, poses, _) = case(11 + 10 * k as u64, d);
         let want = rref::forward(d, &x, &poses);
         for s in SAMPLINGS {

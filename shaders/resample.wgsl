@@ -407,11 +407,12 @@ fn forward_row(gid: vec3<u32>, nwg: vec3<u32>, one: bool) {
     let n = gid.z;
     let m = sampling_map(n);
     let vo = p.od * p.oh * p.ow;
-    // One step along W moves q by column 2 of the map.
-    var q = m.a * vec3<f32>(f32(row / p.oh), f32(row % p.oh), 0.0) + m.b;
+    // Along W, q moves by column 2 of the map: one FMA a component per voxel (no running sum,
+    // whose rounding would drift along the row).
+    let q0 = m.a * vec3<f32>(f32(row / p.oh), f32(row % p.oh), 0.0) + m.b;
     for (var w = 0u; w < p.ow; w++) {
         let v = row * p.ow + w;
-        let cl = cell(q);
+        let cl = cell(q0 + f32(w) * m.a[2]);
         if (one) {
             t_y[n * vo + v] = trilinear_one(quad_layer(n, 0u), cl);
         } else {
@@ -423,7 +424,6 @@ fn forward_row(gid: vec3<u32>, nwg: vec3<u32>, one: bool) {
                 }
             }
         }
-        q += m.a[2];
     }
 }
 

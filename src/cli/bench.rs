@@ -164,8 +164,12 @@ fn resample_cases(gpu: &Gpu, out: [usize; 3], choice: &str) -> Result<Vec<Case>>
     let pose = Tensor::from_slice(gpu, &[1, 6], &resample::pose_from_view(30.0, 60.0, 3.3))?;
     let flops = 16.0 * ys.iter().product::<usize>() as f64;
     let shape = format!("1ch 32^3 -> {}x{}x{}, batch 1", out[0], out[1], out[2]);
+    // The texture rows only where the adapter runs them (as the conv rows, `runs_fast`).
     let ways = [("fast", Sampling::Buffer), ("texture", Sampling::Texture)];
-    let ways: Vec<_> = ways.into_iter().filter(|(n, _)| choice == "all" || choice.split(',').any(|c| c.trim() == *n)).collect();
+    let ways: Vec<_> = ways
+        .into_iter()
+        .filter(|(n, s)| (choice == "all" || choice.split(',').any(|c| c.trim() == *n)) && (*s == Sampling::Buffer || resample::textures_supported(gpu)))
+        .collect();
     let mut v = Vec::new();
     for &(name, s) in &ways {
         let (x, pose, y) = (x.clone(), pose.clone(), y.clone());

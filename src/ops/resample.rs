@@ -27,7 +27,8 @@
 //! The forward and the pose gradient read the grid either from its storage buffer or, where
 //! the device reads textures fast (the one-off conv calibration chose textures: lavapipe),
 //! from a zero-bordered rgba32f texture it is first packed into ([`Sampling`]); the two agree
-//! to f32 rounding (they blend the corners in a different order). On lavapipe 22.3 / AMD Zen 3
+//! to f32 rounding (the texture path blends the corners in another order and maps output
+//! points to sample points by a precomputed affine map). On lavapipe 22.3 / AMD Zen 3
 //! the texture path runs the tiny preset's resampling 32^3 -> 64^3 about 7x faster, forward
 //! and pose gradient (`rendernet bench --filter resample`).
 
@@ -99,8 +100,8 @@ pub enum Sampling {
     Buffer,
     /// The grid packed first into a zero-bordered rgba32f 3D texture (4 channels a texel; with
     /// one channel, the 4 corners of a cell's face), read as a read-only storage texture: ~7x
-    /// cheaper loads on lavapipe. An error where the adapter cannot read such textures or the
-    /// grid does not fit one.
+    /// cheaper loads on lavapipe. An error where the adapter cannot ([`textures_supported`])
+    /// or the grid does not fit its textures.
     Texture,
 }
 
@@ -110,27 +111,46 @@ fn texture_size(n: usize, c: usize, [d, h, w]: [usize; 3]) -> [usize; 3] {
     [w + 2, h + 2, n * c.div_ceil(4) * (d + 2)]
 }
 
-/// Whether `sampling` reads the grid `[n, c, inp...]` from a texture on `gpu`.
+/// Whether `gpu` can run the texture path: read-only rgba32float storage textures, and
+/// subgroups of 8 (its staging shares a shader module with the texture conv kernels, which
+/// use them).
+pub fn textures_supported(gpu: &Gpu) -> bool {
+    gpu.reads_rgba32f_storage() && gpu.has_subgroups_of_8()
+}
+
+/// Whether `sampling` reads the grid `[n, c, inp...]` from a texture on `gpu`. An empty grid
+/// never does (nothing to sample, and no zero-sized texture).
 fn uses_texture(gpu: &Gpu, op: &str, sampling: Sampling, n: usize, c: usize, inp: [usize; 3]) -> Result<bool> {
+    if n * c * inp.iter().product::<usize>() == 0 || sampling == Sampling::Buffer {
+        return Ok(false);
+    }
     let size = texture_size(n, c, inp);
     let limit = gpu.limits.max_texture_dimension_3d as usize;
     // The grid's texture and the stage's (inp[2] / 4, inp[1], n * c * inp[0]); the maps' 2D
-    // texture (3, n) fits whenever they do (n < limit / 3, and 2D limits are at least 3D's).
+    // texture (3, n) fits whenever they do (n <= the grid texture's depth <= the 3D limit,
+    // and 2D limits are at least 3D's).
     let side = size.into_iter().chain([n * c * inp[0]]).max().unwrap_or(0);
-    let fits = side <= limit;
+    // The packing's workgroups along x: one per 64 texel columns of a layer.
+    let groups = (size[0] * size[1]).div_ceil(64);
+    let fits = side <= limit && groups <= MAX_WORKGROUPS_PER_DIM as usize;
     match sampling {
-        Sampling::Buffer => Ok(false),
         Sampling::Auto => Ok(fits && calibrated(gpu) == Operands::Textures),
-        Sampling::Texture if !gpu.reads_rgba32f_storage() => {
-            Err(Error::Device(format!("{op}: Sampling::Texture needs read-only rgba32float storage textures, which this adapter lacks")))
-        }
-        Sampling::Texture if !fits => Err(Error::Limit {
+        _ if !textures_supported(gpu) => Err(Error::Device(format!(
+            "{op}: Sampling::Texture needs read-only rgba32float storage textures and subgroups of 8 lanes, which this adapter lacks"
+        ))),
+        _ if side > limit => Err(Error::Limit {
             what: format!("{op}: side of the packed grid's 3D textures (grid {inp:?}, {n} items of {c} channels)"),
             value: side as u64,
             limit: limit as u64,
             name: "max_texture_dimension_3d",
         }),
-        Sampling::Texture => Ok(true),
+        _ if !fits => Err(Error::Limit {
+            what: format!("{op}: workgroups of the grid's packing (grid {inp:?})"),
+            value: groups as u64,
+            limit: MAX_WORKGROUPS_PER_DIM as u64,
+            name: "max_compute_workgroups_per_dimension",
+        }),
+        _ => Ok(true),
     }
 }
 
