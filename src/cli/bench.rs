@@ -74,8 +74,13 @@ const PASSES: [Pass; 3] = [Pass::Forward, Pass::BackwardInput, Pass::BackwardWei
 const KERNELS: [(&str, ConvKernel); 3] =
     [("reference", ConvKernel::Reference), ("fast", ConvKernel::Buffers), ("texture", ConvKernel::Texture)];
 
+/// Whether `--kernel` `choice` (comma-separated, or `all`) names kernel `name`.
+fn chosen(choice: &str, name: &str) -> bool {
+    choice == "all" || choice.split(',').any(|c| c.trim() == name)
+}
+
 fn kernels(choice: &str) -> Vec<(&'static str, ConvKernel)> {
-    KERNELS.into_iter().filter(|(n, _)| choice == "all" || choice.split(',').any(|c| c.trim() == *n)).collect()
+    KERNELS.into_iter().filter(|(n, _)| chosen(choice, n)).collect()
 }
 
 /// A forward conv case set: input `xs`, weights `ws` (tensors are zeros: timing only).
@@ -168,7 +173,7 @@ fn resample_cases(gpu: &Gpu, out: [usize; 3], choice: &str) -> Result<Vec<Case>>
     let ways = [("fast", Sampling::Buffer), ("texture", Sampling::Texture)];
     let ways: Vec<_> = ways
         .into_iter()
-        .filter(|(n, s)| (choice == "all" || choice.split(',').any(|c| c.trim() == *n)) && (*s == Sampling::Buffer || resample::textures_supported(gpu)))
+        .filter(|(n, s)| chosen(choice, n) && (*s == Sampling::Buffer || resample::textures_supported(gpu)))
         .collect();
     let mut v = Vec::new();
     for &(name, s) in &ways {

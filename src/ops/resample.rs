@@ -281,7 +281,7 @@ pub fn backward_pose_with(
     let params = Params::new(nc.0, nc.1, &x.shape()[2..], &dy.shape()[2..]);
     let [od, oh, ow] = params.out.map(|v| v as usize);
     // Columns of the partials: one per output voxel, or per output row on the texture path.
-    let cols = if uses_texture(gpu, op, sampling, nc.0, nc.1, params.inp.map(|v| v as usize))? {
+    let (scratch, cols) = if uses_texture(gpu, op, sampling, nc.0, nc.1, params.inp.map(|v| v as usize))? {
         let scratch = gpu.scratch(&[nc.0 * POSE_LEN, od * oh])?;
         let tex = Packed::new(gpu, pass, &params, pose, x)?;
         let args = [Arg::R(pose), tex.grid_arg(), Arg::R(dy), Arg::W(&scratch)];
@@ -293,5 +293,5 @@ pub fn backward_pose_with(
         gpu.dispatch(pass, SHADER, "resample_backward_pose", &params, &args, grid_1d((nc.0 * od * oh * ow) as u64, 64)?)?;
         (scratch, od * oh * ow)
     };
-    reduce::sum_outer_inner(gpu, pass, &cols.0, [1, nc.0 * POSE_LEN, cols.1], 1.0, dpose)
+    reduce::sum_outer_inner(gpu, pass, &scratch, [1, nc.0 * POSE_LEN, cols], 1.0, dpose)
 }
