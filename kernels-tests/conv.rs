@@ -1,5 +1,6 @@
 //! Conv3d, conv2d and their transposes against f64 references: forward, and every gradient
-//! (input, weights, bias) against central finite differences of the reference forward. The
+//! (input, weights, bias) against central finite differences of the reference forward (of
+//! every value, or of 500 random ones in the larger tensors: `fd_sample`). The
 //! cases cover the paper's layers (conv 5^3 s2, 3^3 s(1,1,2), 3^3; 2D 3x3, 4x4 SAME;
 //! transposed 4x4 s2 and s1), even kernels (asymmetric SAME), 1x1, explicit asymmetric
 //! padding, and random shapes. The tiled kernels' tests, which reuse these cases, are in
@@ -17,6 +18,7 @@ mod reference;
 use common::*;
 use reference::conv::{self as rc, Geom};
 use rendernet::ops::conv::{self, Conv, ConvKernel, Padding};
+use rendernet::gpu::Tensor;
 use rendernet::ops::conv_transpose::ConvTranspose;
 
 #[path = "conv/tiled.rs"]
@@ -24,6 +26,8 @@ mod tiled;
 
 const ATOL: f64 = 1e-4;
 const RTOL: f64 = 1e-4;
+/// The most values of x or w a case differences (see `fd_sample`).
+const FD_MAX: usize = 500;
 
 /// The op under test.
 #[derive(Clone, Copy, Debug)]
@@ -169,10 +173,17 @@ fn check(c: &Case, seed: u64) {
         conv::backward_bias(gpu(), p, &tr, &tdb)
     });
     let loss = |x: &[f64], w: &[f64], b: &[f64]| dot(&r, &reference(c, &g, x, w, Some(b)));
-    let dx = fd_grad(&x, |x| loss(x, &w, &b));
-    assert_close(&format!("{c:?} dx"), &download(&tdx), &dx, ATOL, RTOL);
-    let dw = fd_grad(&w, |w| loss(&x, w, &b));
-    assert_close(&format!("{c:?} dw"), &download(&tdw), &dw, ATOL, RTOL);
+    // Large cases difference a random sample of each tensor (`fd_sample`): every value of
+    // both is still checked against the reference through the forward above.
+    let (at_x, at_w) = (fd_sample(x.len(), FD_MAX, &mut rng), fd_sample(w.len(), FD_MAX, &mut rng));
+    let pick = |t: &Tensor, at: &[usize]| -> Vec<f64> {
+        let all = download(t);
+        at.iter().map(|&i| all[i]).collect()
+    };
+    let dx = fd_grad_at(&x, at_x.iter().copied(), |x| loss(x, &w, &b));
+    assert_close(&format!("{c:?} dx"), &pick(&tdx, &at_x), &dx, ATOL, RTOL);
+    let dw = fd_grad_at(&w, at_w.iter().copied(), |w| loss(&x, w, &b));
+    assert_close(&format!("{c:?} dw"), &pick(&tdw, &at_w), &dw, ATOL, RTOL);
     let db = fd_grad(&b, |b| loss(&x, &w, b));
     assert_close(&format!("{c:?} db"), &download(&tdb), &db, ATOL, RTOL);
 }
