@@ -11,7 +11,7 @@
 // gradient multiplies them by the lane's own dy. Compiled appended to conv_fast.wgsl,
 // conv_tex.wgsl and conv_tex_weight.wgsl (their Params, bindings, bias4, put_raw, chunk_rows,
 // walk_from, walk_next, dy_quads, and the forward tiles' lane_tile, tile_taps, next_tap, Rows,
-// slide, Acc8, Tile8, tile8, mac_rows8, broadcast8, put_tile8).
+// slide, Acc8, Tile8, tile8, mac_rows8, broadcast8, put_tile8, falpha).
 
 // ---- the stage: the input, 4 voxels along W a texel ----------------------------------------
 // Stage texel (j, h, (n * ci + c) * id + d) holds x[n, c, d, h, 4j..4j+3] (zero past iw): the
@@ -108,7 +108,12 @@ fn direct_weights(t: FwdTile, lane: u32, base: u32, c: u32, kd: u32, kh: u32, kw
 }
 
 @compute @workgroup_size(64)
-fn conv_direct_forward(ids: LaneIds) {
+fn conv_direct_forward(ids: LaneIds) { forward_direct(ids, false); }
+
+@compute @workgroup_size(64)
+fn conv_direct_forward_prelu(ids: LaneIds) { forward_direct(ids, true); }
+
+fn forward_direct(ids: LaneIds, act: bool) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
     let t = fwd_tile_of(tl.x, tl.y, (p.co + 7u) / 8u);
@@ -125,7 +130,7 @@ fn conv_direct_forward(ids: LaneIds) {
         a = mac_rows8(a, taps_rows(t.n, k.kh, zd, zh, i32(p.sh), ws), direct_weights(t, tl.y, tl.z, k.kh, k.kd, k.kw, 4u * k.q));
         k = next_tap(k, p.ci, p.kh, chunks);
     }
-    put_tile8(t, t.cg * 8u, a);
+    put_tile8(t, t.cg * 8u, a, act);
 }
 
 // Tap `ws` alone of row zh (in .x; the kernel's fifth W tap).
@@ -153,7 +158,12 @@ fn mac_rows8_tap1(a: Tile8, x: Rows, w: array<vec4<f32>, 8>) -> Tile8 {
 // 19 row fetches instead of 40 (the most of this kernel's time on lavapipe); and the fifth W
 // tap is multiplied alone, not as a 4-tap chunk of which 3 taps are zero.
 @compute @workgroup_size(64)
-fn conv_direct_forward_k5s2(ids: LaneIds) {
+fn conv_direct_forward_k5s2(ids: LaneIds) { forward_direct_k5s2(ids, false); }
+
+@compute @workgroup_size(64)
+fn conv_direct_forward_k5s2_prelu(ids: LaneIds) { forward_direct_k5s2(ids, true); }
+
+fn forward_direct_k5s2(ids: LaneIds, act: bool) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
     let t = fwd_tile_of(tl.x, tl.y, (p.co + 7u) / 8u);
@@ -186,7 +196,7 @@ fn conv_direct_forward_k5s2(ids: LaneIds) {
         a = mac_rows8_tap1(a, slide(e2, tap1(t.n, c, zd, zh + 18, ws + 4)), direct_weights(t, tl.y, tl.z, c, kd, 4u, 4u));
         k = next_tap(k, 1u, 1u, p.ci);
     }
-    put_tile8(t, t.cg * 8u, a);
+    put_tile8(t, t.cg * 8u, a, act);
 }
 
 // ---- weight gradient: lanes = 8 output columns; each lane 4 W taps x 8 output channels ----

@@ -170,6 +170,23 @@ fn conv_fast_pack_weights_tex_window(@builtin(global_invocation_id) gid: vec3<u3
 // conv3d 16->16 3^3 on 32^3; the accumulators live in memory either way on lavapipe).
 @group(0) @binding(1) var tx: texture_storage_3d<rgba32float, read>;
 @group(0) @binding(2) var tw: texture_storage_2d<rgba32float, read>;
+// The forwards' `_prelu` entry points apply PReLU with these slopes to what they write (a
+// conv followed by a PReLU in a forward-only run, src/graph/exec.rs: the conv's output then
+// never goes through memory). Every forward entry point is a function of a constant `act`,
+// which lavapipe folds: the plain ones load no slope and select nothing.
+@group(0) @binding(5) var<storage, read> falpha: array<f32>;
+
+// Slopes of output channels co..co+3, 1 (identity) without `act`. Channels past the count
+// read the last one's slope; put_raw writes none of them.
+fn alpha4(co: u32, act: bool) -> vec4<f32> {
+    if (!act) { return vec4<f32>(1.0); }
+    let last = p.co - 1u;
+    return vec4<f32>(falpha[min(co, last)], falpha[min(co + 1u, last)], falpha[min(co + 2u, last)], falpha[min(co + 3u, last)]);
+}
+
+fn prelu4(v: vec4<f32>, a: vec4<f32>) -> vec4<f32> {
+    return select(v * a, v, v > vec4<f32>(0.0));
+}
 
 // Activation texel of channel quad `q` at input (zd, zh, zw) of item n, zero off the grid.
 fn tex_x(n: u32, q: u32, zd: u32, zh: i32, zw: i32) -> vec4<f32> {
@@ -209,10 +226,11 @@ fn mac(acc: Acc, x: vec4<f32>, w: W16) -> Acc {
     return r;
 }
 
-fn put_row(n: u32, co: u32, pos: u32, ow: u32, oh: u32, a: Acc) {
+// One row's 16 channels through slopes `al` (see alpha4).
+fn put_row(n: u32, co: u32, pos: u32, ow: u32, oh: u32, a: Acc, al: Acc) {
     if (oh >= p.oh) { return; }
-    put_raw(n, co, pos, ow, a.a0); put_raw(n, co + 4u, pos, ow, a.a1);
-    put_raw(n, co + 8u, pos, ow, a.a2); put_raw(n, co + 12u, pos, ow, a.a3);
+    put_raw(n, co, pos, ow, prelu4(a.a0, al.a0)); put_raw(n, co + 4u, pos, ow, prelu4(a.a1, al.a1));
+    put_raw(n, co + 8u, pos, ow, prelu4(a.a2, al.a2)); put_raw(n, co + 12u, pos, ow, prelu4(a.a3, al.a3));
 }
 
 // (tile, lane, base): a tile is 8 lanes, a workgroup's tiles its 8 groups of 8 invocations;
@@ -316,18 +334,19 @@ fn tile16(cg: u32) -> Tile16 {
     return Tile16(a, a, a, a, a, a, a, a);
 }
 
-fn put_tile16(t: FwdTile, a: Tile16) {
+fn put_tile16(t: FwdTile, a: Tile16, act: bool) {
     if (t.ow >= p.ow) { return; }
     let pos = tile_pos(t);
     let co = t.cg * 16u;
-    put_row(t.n, co, pos, t.ow, t.oh0, a.a0);
-    put_row(t.n, co, pos + p.ysh, t.ow, t.oh0 + 1u, a.a1);
-    put_row(t.n, co, pos + 2u * p.ysh, t.ow, t.oh0 + 2u, a.a2);
-    put_row(t.n, co, pos + 3u * p.ysh, t.ow, t.oh0 + 3u, a.a3);
-    put_row(t.n, co, pos + 4u * p.ysh, t.ow, t.oh0 + 4u, a.a4);
-    put_row(t.n, co, pos + 5u * p.ysh, t.ow, t.oh0 + 5u, a.a5);
-    put_row(t.n, co, pos + 6u * p.ysh, t.ow, t.oh0 + 6u, a.a6);
-    put_row(t.n, co, pos + 7u * p.ysh, t.ow, t.oh0 + 7u, a.a7);
+    let al = Acc(alpha4(co, act), alpha4(co + 4u, act), alpha4(co + 8u, act), alpha4(co + 12u, act));
+    put_row(t.n, co, pos, t.ow, t.oh0, a.a0, al);
+    put_row(t.n, co, pos + p.ysh, t.ow, t.oh0 + 1u, a.a1, al);
+    put_row(t.n, co, pos + 2u * p.ysh, t.ow, t.oh0 + 2u, a.a2, al);
+    put_row(t.n, co, pos + 3u * p.ysh, t.ow, t.oh0 + 3u, a.a3, al);
+    put_row(t.n, co, pos + 4u * p.ysh, t.ow, t.oh0 + 4u, a.a4, al);
+    put_row(t.n, co, pos + 5u * p.ysh, t.ow, t.oh0 + 5u, a.a5, al);
+    put_row(t.n, co, pos + 6u * p.ysh, t.ow, t.oh0 + 6u, a.a6, al);
+    put_row(t.n, co, pos + 7u * p.ysh, t.ow, t.oh0 + 7u, a.a7, al);
 }
 
 // ---- forward: a subgroup of 8 lanes = 8 outputs along W; each lane 8 rows (H) x 16 channels --
@@ -336,7 +355,12 @@ fn put_tile16(t: FwdTile, a: Tile16) {
 // rows between tap rows as conv_fast_forward_tex4_rows3 does measured no faster here: with 16
 // channels the FMAs outweigh the fetches.
 @compute @workgroup_size(64)
-fn conv_fast_forward_tex(ids: LaneIds) {
+fn conv_fast_forward_tex(ids: LaneIds) { forward_tex16(ids, false); }
+
+@compute @workgroup_size(64)
+fn conv_fast_forward_tex_prelu(ids: LaneIds) { forward_tex16(ids, true); }
+
+fn forward_tex16(ids: LaneIds, act: bool) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
     let ft = fwd_tile(tl.x, tl.y);
@@ -363,7 +387,7 @@ fn conv_fast_forward_tex(ids: LaneIds) {
             k = next_tap(k, p.kh, p.kw, 1u);
         }
     }
-    put_tile16(ft, a);
+    put_tile16(ft, a, act);
 }
 
 // ---- forward, half width (co <= 8): a subgroup = 8 outputs along W; each lane 8 rows x 8 channels
@@ -378,9 +402,9 @@ fn mac8(acc: Acc8, x: vec4<f32>, w: array<vec4<f32>, 8>) -> Acc8 {
 }
 
 // Output channels co..co+7 of one row.
-fn put_row8(n: u32, co: u32, pos: u32, ow: u32, oh: u32, a: Acc8) {
+fn put_row8(n: u32, co: u32, pos: u32, ow: u32, oh: u32, a: Acc8, al: Acc8) {
     if (oh >= p.oh) { return; }
-    put_raw(n, co, pos, ow, a.a0); put_raw(n, co + 4u, pos, ow, a.a1);
+    put_raw(n, co, pos, ow, prelu4(a.a0, al.a0)); put_raw(n, co + 4u, pos, ow, prelu4(a.a1, al.a1));
 }
 
 struct Tile8 { a0: Acc8, a1: Acc8, a2: Acc8, a3: Acc8, a4: Acc8, a5: Acc8, a6: Acc8, a7: Acc8 }
@@ -407,21 +431,27 @@ fn tile8(co: u32) -> Tile8 {
     return Tile8(a, a, a, a, a, a, a, a);
 }
 
-fn put_tile8(t: FwdTile, co: u32, a: Tile8) {
+fn put_tile8(t: FwdTile, co: u32, a: Tile8, act: bool) {
     if (t.ow >= p.ow) { return; }
     let pos = tile_pos(t);
-    put_row8(t.n, co, pos, t.ow, t.oh0, a.a0);
-    put_row8(t.n, co, pos + p.ysh, t.ow, t.oh0 + 1u, a.a1);
-    put_row8(t.n, co, pos + 2u * p.ysh, t.ow, t.oh0 + 2u, a.a2);
-    put_row8(t.n, co, pos + 3u * p.ysh, t.ow, t.oh0 + 3u, a.a3);
-    put_row8(t.n, co, pos + 4u * p.ysh, t.ow, t.oh0 + 4u, a.a4);
-    put_row8(t.n, co, pos + 5u * p.ysh, t.ow, t.oh0 + 5u, a.a5);
-    put_row8(t.n, co, pos + 6u * p.ysh, t.ow, t.oh0 + 6u, a.a6);
-    put_row8(t.n, co, pos + 7u * p.ysh, t.ow, t.oh0 + 7u, a.a7);
+    let al = Acc8(alpha4(co, act), alpha4(co + 4u, act));
+    put_row8(t.n, co, pos, t.ow, t.oh0, a.a0, al);
+    put_row8(t.n, co, pos + p.ysh, t.ow, t.oh0 + 1u, a.a1, al);
+    put_row8(t.n, co, pos + 2u * p.ysh, t.ow, t.oh0 + 2u, a.a2, al);
+    put_row8(t.n, co, pos + 3u * p.ysh, t.ow, t.oh0 + 3u, a.a3, al);
+    put_row8(t.n, co, pos + 4u * p.ysh, t.ow, t.oh0 + 4u, a.a4, al);
+    put_row8(t.n, co, pos + 5u * p.ysh, t.ow, t.oh0 + 5u, a.a5, al);
+    put_row8(t.n, co, pos + 6u * p.ysh, t.ow, t.oh0 + 6u, a.a6, al);
+    put_row8(t.n, co, pos + 7u * p.ysh, t.ow, t.oh0 + 7u, a.a7, al);
 }
 
 @compute @workgroup_size(64)
-fn conv_fast_forward_tex8(ids: LaneIds) {
+fn conv_fast_forward_tex8(ids: LaneIds) { forward_tex8(ids, false); }
+
+@compute @workgroup_size(64)
+fn conv_fast_forward_tex8_prelu(ids: LaneIds) { forward_tex8(ids, true); }
+
+fn forward_tex8(ids: LaneIds, act: bool) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
     // co16 = 1: channel group 0.
@@ -434,7 +464,7 @@ fn conv_fast_forward_tex8(ids: LaneIds) {
         a = mac_rows8(a, tap_rows(ft, t, k), weights8(tl.y, tl.z, y));
         k = next_tap(k, p.kh, p.kw, cq);
     }
-    put_tile8(ft, 0u, a);
+    put_tile8(ft, 0u, a, act);
 }
 
 // ---- forward, narrow (co <= 4): a subgroup = 8 outputs along W; each lane 8 rows x 4 channels --
@@ -445,8 +475,8 @@ fn mac4(a: vec4<f32>, x: vec4<f32>, w0: vec4<f32>, w1: vec4<f32>, w2: vec4<f32>,
     return a + x.x * w0 + x.y * w1 + x.z * w2 + x.w * w3;
 }
 
-fn put4(n: u32, pos: u32, ow: u32, oh: u32, a: vec4<f32>) {
-    if (oh < p.oh) { put_raw(n, 0u, pos, ow, a); }
+fn put4(n: u32, pos: u32, ow: u32, oh: u32, a: vec4<f32>, al: vec4<f32>) {
+    if (oh < p.oh) { put_raw(n, 0u, pos, ow, prelu4(a, al)); }
 }
 
 struct W4 { w0: vec4<f32>, w1: vec4<f32>, w2: vec4<f32>, w3: vec4<f32> }
@@ -469,21 +499,27 @@ fn tile4() -> Rows {
     return Rows(a, a, a, a, a, a, a, a);
 }
 
-fn put_tile4(t: FwdTile, a: Rows) {
+fn put_tile4(t: FwdTile, a: Rows, act: bool) {
     if (t.ow >= p.ow) { return; }
     let pos = tile_pos(t);
-    put4(t.n, pos, t.ow, t.oh0, a.r0);
-    put4(t.n, pos + p.ysh, t.ow, t.oh0 + 1u, a.r1);
-    put4(t.n, pos + 2u * p.ysh, t.ow, t.oh0 + 2u, a.r2);
-    put4(t.n, pos + 3u * p.ysh, t.ow, t.oh0 + 3u, a.r3);
-    put4(t.n, pos + 4u * p.ysh, t.ow, t.oh0 + 4u, a.r4);
-    put4(t.n, pos + 5u * p.ysh, t.ow, t.oh0 + 5u, a.r5);
-    put4(t.n, pos + 6u * p.ysh, t.ow, t.oh0 + 6u, a.r6);
-    put4(t.n, pos + 7u * p.ysh, t.ow, t.oh0 + 7u, a.r7);
+    let al = alpha4(0u, act);
+    put4(t.n, pos, t.ow, t.oh0, a.r0, al);
+    put4(t.n, pos + p.ysh, t.ow, t.oh0 + 1u, a.r1, al);
+    put4(t.n, pos + 2u * p.ysh, t.ow, t.oh0 + 2u, a.r2, al);
+    put4(t.n, pos + 3u * p.ysh, t.ow, t.oh0 + 3u, a.r3, al);
+    put4(t.n, pos + 4u * p.ysh, t.ow, t.oh0 + 4u, a.r4, al);
+    put4(t.n, pos + 5u * p.ysh, t.ow, t.oh0 + 5u, a.r5, al);
+    put4(t.n, pos + 6u * p.ysh, t.ow, t.oh0 + 6u, a.r6, al);
+    put4(t.n, pos + 7u * p.ysh, t.ow, t.oh0 + 7u, a.r7, al);
 }
 
 @compute @workgroup_size(64)
-fn conv_fast_forward_tex4(ids: LaneIds) {
+fn conv_fast_forward_tex4(ids: LaneIds) { forward_tex4(ids, false); }
+
+@compute @workgroup_size(64)
+fn conv_fast_forward_tex4_prelu(ids: LaneIds) { forward_tex4(ids, true); }
+
+fn forward_tex4(ids: LaneIds, act: bool) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
     // co16 = 1: channel group 0.
@@ -496,11 +532,16 @@ fn conv_fast_forward_tex4(ids: LaneIds) {
         a = mac_rows4(a, tap_rows(ft, t, k), weights4(tl.y, tl.z, y));
         k = next_tap(k, p.kh, p.kw, cq);
     }
-    put_tile4(ft, a);
+    put_tile4(ft, a, act);
 }
 
 @compute @workgroup_size(64)
-fn conv_fast_forward_tex4_rows3(ids: LaneIds) {
+fn conv_fast_forward_tex4_rows3(ids: LaneIds) { forward_tex4_rows3(ids, false); }
+
+@compute @workgroup_size(64)
+fn conv_fast_forward_tex4_rows3_prelu(ids: LaneIds) { forward_tex4_rows3(ids, true); }
+
+fn forward_tex4_rows3(ids: LaneIds, act: bool) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
     let ft = fwd_tile(tl.x, tl.y);
@@ -523,5 +564,5 @@ fn conv_fast_forward_tex4_rows3(ids: LaneIds) {
         a = mac_rows4(a, x2, weights4(tl.y, tl.z, y + 2u * p.kw * cq));
         k = next_tap(k, 1u, p.kw, cq);
     }
-    put_tile4(ft, a);
+    put_tile4(ft, a, act);
 }

@@ -454,3 +454,65 @@ fn a_frozen_backward_reuses_its_packings_and_weights_that_are_inputs_never_do() 
     fresh.forward(gpu()).unwrap();
     assert_eq!(ex.read(gpu(), n.y).unwrap(), fresh.read(gpu(), n.y).unwrap(), "new input weights");
 }
+
+// A forward-only run writes a PReLU that follows a conv in the conv's own dispatch
+// (`Executor::prelu_fusions`): x [1, 1, 9, 10, 11] -> conv3d 1->8 5^3 s2 (direct kernels) ->
+// prelu -> conv3d 8->16 3^3 (16-channel tile) -> prelu -> y, the second conv's output also
+// feeding `side` (so that PReLU is not fused: its input is read twice); y + side -> a
+// transposed conv -> prelu -> z.
+#[test]
+fn a_forward_only_run_fuses_conv_and_prelu_with_identical_values() {
+    use rendernet::ops::conv::{Conv, ConvKernel, Padding};
+    use rendernet::ops::conv_transpose::ConvTranspose;
+    let mut g = Graph::new();
+    let x = g.input("x", &[1, 1, 9, 10, 11]).unwrap();
+    let w1 = g.param("c1.weight", &[8, 1, 5, 5, 5], Init::Xavier).unwrap();
+    let b1 = g.param("c1.bias", &[8], Init::Constant(0.01)).unwrap();
+    let a1 = g.param("a1.alpha", &[8], Init::Constant(0.3)).unwrap();
+    let w2 = g.param("c2.weight", &[16, 8, 3, 3, 3], Init::Xavier).unwrap();
+    let b2 = g.param("c2.bias", &[16], Init::Constant(-0.01)).unwrap();
+    let a2 = g.param("a2.alpha", &[16], Init::Constant(-0.2)).unwrap();
+    let c1 = g.apply("c1", Op::Conv(Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same)), &[x, w1, b1]).unwrap();
+    let h = g.apply("a1", Op::Prelu, &[c1, a1]).unwrap();
+    let c2 = g.apply("c2", Op::Conv(Conv::conv3d([3, 3, 3], [1, 1, 1], Padding::Same)), &[h, w2, b2]).unwrap();
+    let y = g.apply("a2", Op::Prelu, &[c2, a2]).unwrap();
+    let side = g.apply("side", Op::Sigmoid, &[c2]).unwrap();
+    let total = g.apply("total", Op::Add, &[y, side]).unwrap();
+    let target = g.input("target", &[1, 16, 5, 5, 6]).unwrap();
+    let loss = g.apply("loss", Op::Loss(Loss::Mse), &[total, target]).unwrap();
+    // And a transposed conv 16->4 4^3 stride 2 then a PReLU, fused too: z [1, 4, 10, 10, 12].
+    let w3 = g.param("t3.weight", &[16, 4, 4, 4, 4], Init::Xavier).unwrap();
+    let b3 = g.param("t3.bias", &[4], Init::Constant(0.02)).unwrap();
+    let a3 = g.param("a3.alpha", &[4], Init::Constant(0.5)).unwrap();
+    let t3 = g.apply("t3", Op::ConvTranspose(ConvTranspose::conv3d([4, 4, 4], [2, 2, 2], Padding::Same)), &[total, w3, b3]).unwrap();
+    let z = g.apply("a3", Op::Prelu, &[t3, a3]).unwrap();
+    let fuses = Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same).fuses_prelu(ConvKernel::Auto, gpu(), &[1, 1, 9, 10, 11], &[8, 1, 5, 5, 5]).unwrap();
+    let run = |keep_c1: bool, backward: bool| {
+        let mut ex = Executor::new(gpu(), g.clone(), 3).unwrap();
+        ex.feed(gpu(), x, &f32v(&Rng(8).vec(9 * 10 * 11, -1.0, 1.0))).unwrap();
+        ex.keep(total);
+        ex.keep(z);
+        if keep_c1 {
+            ex.keep(c1);
+            ex.keep(t3);
+        }
+        let stats = if backward { ex.backward(gpu(), loss).unwrap() } else { ex.forward(gpu()).unwrap() };
+        ([ex.read(gpu(), total).unwrap(), ex.read(gpu(), z).unwrap()], stats.dispatches)
+    };
+    let (fused, d_fused) = run(false, false);
+    // The same forward without fusion: c1's output kept for the caller, or a backward run
+    // (which saves it for a1's backward); values equal to the bit.
+    let (kept, d_kept) = run(true, false);
+    let (with_backward, _) = run(false, true);
+    assert_eq!(fused, kept, "fused against c1's output kept");
+    assert_eq!(fused, with_backward, "fused against a backward run's forward");
+    // Two PReLUs fused on lavapipe (c1 -> a1 and t3 -> a3; a2's input c2 is read by `side`
+    // too): their dispatches are gone; elsewhere nothing fuses and nothing changes.
+    let prelu_dispatches = {
+        let (t, a, o) = (upload(&[1, 8, 5, 5, 6], &vec![0.5; 1200]), upload(&[8], &[0.1; 8]), zeros(&[1, 8, 5, 5, 6]));
+        let d0 = gpu().dispatch_count();
+        common::run(|p| rendernet::ops::prelu::forward(gpu(), p, &t, &a, &o));
+        gpu().dispatch_count() - d0
+    };
+    assert_eq!(d_kept - d_fused, if fuses { 2 * prelu_dispatches } else { 0 }, "dispatches fused {d_fused}, kept {d_kept}");
+}

@@ -344,3 +344,69 @@ fn backward_in_one_call_equals_the_two_passes_and_packs_dy_once() {
         assert_eq!((download(&dx), download(&dw)), (download(&dx1), download(&dw1)), "one gradient at a time, {co} channels");
     }
 }
+
+/// `Conv::forward_prelu` (the texture family's `_prelu` entry points) against the f64
+/// reference conv then PReLU, on every forward tile that writes an output: 16 channels (8 in,
+/// not folded; 20 out: a second, part-filled group), 8 (7 out), 4 (3 out, 5x5 taps) and its `_rows3` form (3x3,
+/// row stride 1), and the direct kernels of few input channels (`conv_direct_forward` and
+/// `_k5s2`), and transposed convs, whose forward runs those tiles per output phase. Slopes
+/// include 0, negative and > 1 values, so a slope read for the wrong channel
+/// or not applied shows; where the texture kernels do not run the conv, `fuses_prelu` is false
+/// and `forward_prelu` an error.
+#[test]
+fn texture_forward_with_fused_prelu() {
+    if !conv::Conv::conv3d([1; 3], [1; 3], Padding::Same).fuses_prelu(ConvKernel::Texture, gpu(), &[1, 4, 4, 4, 4], &[4, 4, 1, 1, 1]).unwrap() {
+        eprintln!("skipped: this adapter does not run the texture kernels");
+        return;
+    }
+    let with = |c: Case, ci: usize, co: usize, input: [usize; 3]| Case { ci, co, input, kernel: ConvKernel::Texture, ..c };
+    let cases = [
+        with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 8, 20, [3, 9, 10]),
+        with(conv2d([3, 3], [2, 1], Padding::Same), 8, 7, [1, 13, 5]),
+        with(conv2d([5, 5], [1, 1], Padding::Same), 8, 3, [1, 6, 9]),
+        with(conv2d([3, 3], [1, 1], Padding::Same), 16, 3, [1, 11, 5]),
+        with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 1, 9, [5, 19, 11]),
+        with(conv3d([3, 3, 3], [2, 1, 1], Padding::Same), 1, 3, [4, 5, 9]),
+        // Transposed (one stride-1 conv per output phase, each applying the slopes): the
+        // decoder's 4x4 stride 2 to 20 and to 7 channels, and a 3D one.
+        with(transposed2d([4, 4], [2, 2], Padding::Same, None), 16, 20, [1, 5, 6]),
+        with(transposed2d([4, 4], [2, 2], Padding::Same, None), 8, 7, [1, 6, 4]),
+        with(transposed3d([3, 2, 3], [1, 2, 2], explicit([1, 0, 2], [0, 1, 1]), None), 5, 6, [3, 4, 5]),
+    ];
+    for (k, c) in cases.into_iter().enumerate() {
+        let g = geom(&c);
+        let (xs, ws, ys) = (shape(c.d2, c.n, c.ci, g.input), w_shape(&c), shape(c.d2, c.n, c.co, g.output));
+        let fuses = match c.op {
+            Op::Conv(op) => op.fuses_prelu(c.kernel, gpu(), &xs, &ws),
+            Op::Transposed(op) => op.fuses_prelu(c.kernel, gpu(), &xs, &ws, &ys),
+        };
+        assert!(fuses.unwrap(), "{c:?} should fuse");
+        let mut rng = Rng(400 + k as u64);
+        let x = f32_round(&rng.vec(xs.iter().product(), -1.0, 1.0));
+        let w = f32_round(&rng.vec(ws.iter().product(), -1.0, 1.0));
+        let b = f32_round(&rng.vec(c.co, -1.0, 1.0));
+        let mut alpha = f32_round(&rng.vec(c.co, -0.5, 1.5));
+        alpha[0] = 0.0;
+        let (tx, tw, tb, ta, ty) = (upload(&xs, &x), upload(&ws, &w), upload(&[c.co], &b), upload(&[c.co], &alpha), zeros(&ys));
+        run(|p| match c.op {
+            Op::Conv(op) => op.forward_prelu(c.kernel, gpu(), p, &tx, &tw, Some(&tb), &ta, &ty),
+            Op::Transposed(op) => op.forward_prelu(c.kernel, gpu(), p, &tx, &tw, Some(&tb), &ta, &ty),
+        });
+        let s = ys[2..].iter().product();
+        let want = reference::activations::prelu(&reference(&c, &g, &x, &w, Some(&b)), &alpha, c.co, s);
+        assert_close(&format!("{c:?} forward + prelu"), &download(&ty), &want, ATOL, RTOL);
+        // The plain forward of the same conv is unchanged by the slopes' binding.
+        let y = zeros(&ys);
+        run(|p| match c.op {
+            Op::Conv(op) => op.forward(c.kernel, gpu(), p, &tx, &tw, Some(&tb), &y),
+            Op::Transposed(op) => op.forward(c.kernel, gpu(), p, &tx, &tw, Some(&tb), &y),
+        });
+        assert_close(&format!("{c:?} forward"), &download(&y), &reference(&c, &g, &x, &w, Some(&b)), ATOL, RTOL);
+    }
+    // The reference kernels apply no PReLU: refused with a clear error, not a wrong result.
+    let op = conv::Conv::conv2d([3, 3], [1, 1], Padding::Same);
+    let (x, w, a, y) = (zeros(&[1, 4, 5, 5]), zeros(&[4, 4, 3, 3]), zeros(&[4]), zeros(&[1, 4, 5, 5]));
+    assert!(!op.fuses_prelu(ConvKernel::Reference, gpu(), x.shape(), w.shape()).unwrap());
+    let err = gpu().run(|p| op.forward_prelu(ConvKernel::Reference, gpu(), p, &x, &w, None, &a, &y)).unwrap_err();
+    assert!(err.to_string().contains("fuses_prelu"), "{err}");
+}

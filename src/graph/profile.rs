@@ -18,7 +18,8 @@ use crate::gpu::Gpu;
 #[derive(Clone, Debug, PartialEq)]
 pub struct OpTime {
     /// The node's name and what ran: `"enc3d.conv1 forward"`, `"enc3d.conv1 backward"`,
-    /// `"adam"`.
+    /// `"adam"`. A PReLU that the conv before it applied (see `Executor`'s PReLU fusion)
+    /// keeps its row, with no dispatches and about 0 ns: its work is in the conv's time.
     pub name: String,
     /// The op's kind as [`super::Op`] names it (`"conv"`, `"prelu"`, ...; `"adam"`).
     pub kind: String,

@@ -6,7 +6,7 @@
 //! [`ConvKernel::Auto`] picks them. Both are deterministic.
 
 use super::{conv_fast, expect_rank, expect_shape};
-use crate::error::{Result, shape_err};
+use crate::error::{Error, Result, shape_err};
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
 const SHADER: Shader = wgsl!("conv");
@@ -262,6 +262,41 @@ impl Conv {
         dispatch_forward(kernel, gpu, pass, &g, x, w, b, y)
     }
 
+    /// `y = prelu(conv(x, w) + b, alpha)`, one slope per output channel (`alpha` `[Cout]`),
+    /// in the conv's own dispatch: the conv's output never goes through memory (what a
+    /// forward-only graph run does with a conv followed by a PReLU). Only where
+    /// [`Conv::fuses_prelu`] holds: elsewhere an error.
+    #[allow(clippy::too_many_arguments)]
+    pub fn forward_prelu(
+        &self,
+        kernel: ConvKernel,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        x: &Tensor,
+        w: &Tensor,
+        b: Option<&Tensor>,
+        alpha: &Tensor,
+        y: &Tensor,
+    ) -> Result<()> {
+        const OP: &str = "conv_forward_prelu";
+        let g = self.geometry(OP, x.shape(), w.shape())?;
+        expect_shape(OP, "y", y, &g.y_shape())?;
+        expect_shape(OP, "alpha", alpha, &[g.co])?;
+        check_bias(OP, b, g.co)?;
+        if !use_fast(kernel, Pass::Forward, &g) || !conv_fast::fuses_prelu(gpu, &g, operands(gpu, kernel)) {
+            return Err(Error::Invalid(format!("{OP}: this conv's forward on {kernel:?} does not run the texture kernels, which alone apply a PReLU (see Conv::fuses_prelu)")));
+        }
+        conv_fast::forward_act(gpu, pass, &g, x, w, b, Some(alpha), y, operands(gpu, kernel))
+    }
+
+    /// Whether [`Conv::forward_prelu`] runs this conv on `kernel` and `gpu` for input
+    /// `x_shape` and weights `w_shape`: where its forward runs the texture kernels (on
+    /// lavapipe, every conv of the RenderNet presets).
+    pub fn fuses_prelu(&self, kernel: ConvKernel, gpu: &Gpu, x_shape: &[usize], w_shape: &[usize]) -> Result<bool> {
+        let g = self.geometry("conv_forward_prelu", x_shape, w_shape)?;
+        Ok(use_fast(kernel, Pass::Forward, &g) && conv_fast::fuses_prelu(gpu, &g, operands(gpu, kernel)))
+    }
+
     /// `dx = dL/dx` from `dy = dL/dy` (shape of `y`) and the weights on `kernel`; `dx` has
     /// `x`'s shape.
     pub fn backward_input(
@@ -385,7 +420,7 @@ pub fn calibrate(gpu: &Gpu) {
 
 /// The operands the tiled kernels read for `kernel`; `Auto` takes the calibrated choice
 /// (see `conv_fast::calibrated`).
-fn operands(gpu: &Gpu, kernel: ConvKernel) -> conv_fast::Operands {
+pub(crate) fn operands(gpu: &Gpu, kernel: ConvKernel) -> conv_fast::Operands {
     match kernel {
         ConvKernel::Buffers => conv_fast::Operands::Buffers,
         ConvKernel::Texture => conv_fast::Operands::Textures,

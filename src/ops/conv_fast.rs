@@ -5,7 +5,7 @@
 //! layouts.
 
 use super::conv::{Geometry, Params};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use super::conv_pack::{Packed, pack_folded, pack_input, pack_w, pack_x, stage_x};
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
@@ -170,6 +170,7 @@ fn direct_fits(gpu: &Gpu, ops: Operands, g: &Geometry, f: &Folded) -> bool {
 /// on packed operands: per invocation 8 outputs along W x 16 output channels (buffers), or
 /// per subgroup of 8 lanes 8 outputs along W x 8 rows x 16 output channels (textures; 4
 /// channels when there are no more).
+#[allow(clippy::too_many_arguments)]
 fn forward_packed(
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
@@ -177,27 +178,36 @@ fn forward_packed(
     xp: &Packed,
     wp: &Packed,
     b: Option<&Tensor>,
+    alpha: Option<&Tensor>,
     y: &Tensor,
 ) -> Result<()> {
     let p = Params { has_bias: b.is_some() as u32, ..p };
     let bias = b.map_or(Arg::Absent, Arg::R);
-    let args = [xp.arg(), wp.arg(), bias, Arg::W(y)];
+    let args = [xp.arg(), wp.arg(), bias, Arg::W(y), alpha.map_or(Arg::Absent, Arg::R)];
     if let Packed::Texture(..) = xp {
         let tiles = (p.n * p.co16 * p.od * p.oh.div_ceil(8) * p.ow.div_ceil(8)) as usize;
         let p = Params { total: tiles as u32, ..p };
         // At most 4 or 8 output channels: the 4- or 8-channel tile (co16 = 1, so the same
         // tile count); with 4 and 3 tap rows at row stride 1 (the 3x3 heads), `_rows3`
         // fetches each input row once for all three tap rows.
-        let entry = match p.co {
-            ..=4 if p.kh == 3 && p.sh == 1 => "conv_fast_forward_tex4_rows3",
-            ..=4 => "conv_fast_forward_tex4",
-            5..=8 => "conv_fast_forward_tex8",
-            _ => "conv_fast_forward_tex",
+        // Each with a `_prelu` twin that applies the slopes `alpha` to what it writes.
+        let entry = match (p.co, alpha.is_some()) {
+            (..=4, false) if p.kh == 3 && p.sh == 1 => "conv_fast_forward_tex4_rows3",
+            (..=4, true) if p.kh == 3 && p.sh == 1 => "conv_fast_forward_tex4_rows3_prelu",
+            (..=4, false) => "conv_fast_forward_tex4",
+            (..=4, true) => "conv_fast_forward_tex4_prelu",
+            (5..=8, false) => "conv_fast_forward_tex8",
+            (5..=8, true) => "conv_fast_forward_tex8_prelu",
+            (_, false) => "conv_fast_forward_tex",
+            (_, true) => "conv_fast_forward_tex_prelu",
         };
         return gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?);
     }
+    if alpha.is_some() {
+        return Err(Error::Invalid("internal: a PReLU fused into a conv needs the texture kernels (see conv_fast::fuses_prelu)".into()));
+    }
     let tiles = (p.n * p.co16 * p.od * p.oh * p.ow.div_ceil(8)) as usize;
-    dispatch(gpu, pass, "conv_fast_forward", p, &args, tiles)
+    dispatch(gpu, pass, "conv_fast_forward", p, &args[..4], tiles)
 }
 
 /// Tiled `y = conv(x, w) + b` (any stride and padding), with taps folded into channels
@@ -213,31 +223,76 @@ pub(crate) fn forward(
     y: &Tensor,
     ops: Operands,
 ) -> Result<()> {
+    forward_act(gpu, pass, g, x, w, b, None, y, ops)
+}
+
+/// Whether [`forward_act`] can apply a PReLU to `g`'s output for `ops`: its forward runs the texture kernels
+/// (the direct ones or the unfolded tiles), whose every forward entry point has a `_prelu` twin.
+pub(crate) fn fuses_prelu(gpu: &Gpu, g: &Geometry, ops: Operands) -> bool {
+    let f = fold(g, 4);
+    direct_fits(gpu, ops, g, &f) || (textures_fit(gpu, ops, &f.g, f.g.ci.div_ceil(4) * 4) && f.fold() == 1)
+}
+
+/// [`forward`] followed by PReLU with slopes `alpha` (`[Cout]`, one per output channel) in
+/// the same dispatch, where [`fuses_prelu`] says the texture kernels run it; an error elsewhere.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn forward_act(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    x: &Tensor,
+    w: &Tensor,
+    b: Option<&Tensor>,
+    alpha: Option<&Tensor>,
+    y: &Tensor,
+    ops: Operands,
+) -> Result<()> {
     let f = fold(g, 4);
     let cpad = f.g.ci.div_ceil(4) * 4;
     if direct_fits(gpu, ops, g, &f) {
-        return forward_direct(gpu, pass, g, x, w, b, y);
+        return forward_direct(gpu, pass, g, x, w, b, alpha, y);
     }
     // A fold on textures runs the direct kernels or nothing: the texture packing never folds.
     let tex = textures_fit(gpu, ops, &f.g, cpad) && f.fold() == 1;
     let xp = pack_x(gpu, pass, g, &f, x, cpad, tex)?;
     let p = params(&f.g, cpad);
     let wp = pack_w(gpu, pass, Params { fold: f.fold() as u32, ..p }, w, tex)?;
-    forward_packed(gpu, pass, p, &xp, &wp, b, y)
+    forward_packed(gpu, pass, p, &xp, &wp, b, alpha, y)
 }
 
 /// `forward` of a conv the texture family would fold (few input channels) without folding:
 /// the input staged four voxels along W a texel, read in place by `conv_direct_forward`.
-fn forward_direct(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor, w: &Tensor, b: Option<&Tensor>, y: &Tensor) -> Result<()> {
+#[allow(clippy::too_many_arguments)]
+fn forward_direct(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    x: &Tensor,
+    w: &Tensor,
+    b: Option<&Tensor>,
+    alpha: Option<&Tensor>,
+    y: &Tensor,
+) -> Result<()> {
     let cpad = g.ci.div_ceil(4) * 4;
     let p = params(g, cpad);
     let stage = stage_x(gpu, pass, g, x, &p)?;
     let wp = pack_w(gpu, pass, p, w, true)?;
     let tiles = g.n * g.co.div_ceil(8) * volume([g.output[0], g.output[1].div_ceil(8), g.output[2].div_ceil(8)]);
     let p = Params { has_bias: b.is_some() as u32, total: tiles as u32, ..p };
-    let args = [Arg::ReadStorageTexture(&stage, wgpu::TextureViewDimension::D3), wp.arg(), b.map_or(Arg::Absent, Arg::R), Arg::W(y)];
+    let args = [
+        Arg::ReadStorageTexture(&stage, wgpu::TextureViewDimension::D3),
+        wp.arg(),
+        b.map_or(Arg::Absent, Arg::R),
+        Arg::W(y),
+        alpha.map_or(Arg::Absent, Arg::R),
+    ];
     // A 5 x 5 kernel at row stride 2 (the first layer): each input row fetched once.
-    let entry = if g.kernel[1] == 5 && g.kernel[2] == 5 && g.stride[1] == 2 { "conv_direct_forward_k5s2" } else { "conv_direct_forward" };
+    let entry = match (g.kernel[1] == 5 && g.kernel[2] == 5 && g.stride[1] == 2, alpha.is_some()) {
+        (true, false) => "conv_direct_forward_k5s2",
+        (true, true) => "conv_direct_forward_k5s2_prelu",
+        (false, false) => "conv_direct_forward",
+        (false, true) => "conv_direct_forward_prelu",
+    };
     gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?)
 }
 
@@ -273,9 +328,33 @@ pub(crate) fn backward_input(
     dx: &Tensor,
     ops: Operands,
 ) -> Result<()> {
+    backward_input_act(gpu, pass, g, dy, w, b, None, dx, ops)
+}
+
+/// [`backward_input`] followed by PReLU with slopes `alpha` (`[Cin]`) in the same dispatches:
+/// a transposed conv's forward then its activation, where [`transposed_fuses_prelu`] holds.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn backward_input_act(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    dy: &Tensor,
+    w: &Tensor,
+    b: Option<&Tensor>,
+    alpha: Option<&Tensor>,
+    dx: &Tensor,
+    ops: Operands,
+) -> Result<()> {
     let (whole, cpad, tex) = dy_packing(gpu, g, ops);
     let dyp = pack_x(gpu, pass, &whole, &Folded::none(whole), dy, cpad, tex)?;
-    backward_input_packed(gpu, pass, g, &dyp, w, b, dx, cpad, tex)
+    backward_input_packed(gpu, pass, g, &dyp, w, b, alpha, dx, cpad, tex)
+}
+
+/// Whether [`backward_input_act`] can apply a PReLU to `g`'s input gradient (a transposed
+/// conv's output) for `ops`: every phase then runs the texture tiles, which have `_prelu` twins.
+pub(crate) fn transposed_fuses_prelu(gpu: &Gpu, g: &Geometry, ops: Operands) -> bool {
+    let (_, _, tex) = dy_packing(gpu, g, ops);
+    tex && !input_k5s2(gpu, g)
 }
 
 /// How `backward_input` packs dy: the dispatch geometry (dy as the input, at most the whole
@@ -310,7 +389,7 @@ pub(crate) fn backward(
         return backward_weight(gpu, pass, g, x, dy, dw, ops);
     }
     let dyp = pack_x(gpu, pass, &whole, &Folded::none(whole), dy, cpad, tex)?;
-    backward_input_packed(gpu, pass, g, &dyp, w, None, dx, cpad, tex)?;
+    backward_input_packed(gpu, pass, g, &dyp, w, None, None, dx, cpad, tex)?;
     let (f, xcpad, _) = wt.expect("checked");
     backward_weight_tex(gpu, pass, g, &f, x, &dyp, dw, xcpad)
 }
@@ -324,11 +403,15 @@ fn backward_input_packed(
     dyp: &Packed,
     w: &Tensor,
     b: Option<&Tensor>,
+    alpha: Option<&Tensor>,
     dx: &Tensor,
     cpad: usize,
     tex: bool,
 ) -> Result<()> {
     if tex && input_k5s2(gpu, g) {
+        if alpha.is_some() {
+            return Err(Error::Invalid("internal: the 1-channel 5^3 input gradient applies no PReLU (see transposed_fuses_prelu)".into()));
+        }
         return backward_input_k5s2(gpu, pass, g, dyp, w, b, dx, cpad);
     }
     let [_, fh, fw] = g.input;
@@ -369,7 +452,7 @@ fn backward_input_packed(
             yoff: u((r[0] * fh + r[1]) * fw + r[2]),
             ..base
         };
-        forward_packed(gpu, pass, p, dyp, &wp, b, dx)?;
+        forward_packed(gpu, pass, p, dyp, &wp, b, alpha, dx)?;
     }
     Ok(())
 }

@@ -15,7 +15,8 @@
 //! | backward_bias               | [`conv::backward_bias`] over `dy`'s channels           |
 
 use super::conv::{self, Conv, ConvKernel, Geometry, Padding, check_bias};
-use crate::error::{Result, shape_err};
+use super::{conv_fast, expect_shape};
+use crate::error::{Error, Result, shape_err};
 use crate::gpu::{Gpu, Tensor};
 
 /// A transposed convolution, described by its equivalent forward conv.
@@ -130,6 +131,38 @@ impl ConvTranspose {
         let g = self.geometry(OP, x.shape(), w.shape(), y.shape())?;
         check_bias(OP, b, g.ci)?;
         conv::dispatch_backward_input(kernel, gpu, pass, &g, x, w, b, y)
+    }
+
+    /// `y = prelu(conv_transpose(x, w) + b, alpha)` (`alpha` `[Cout]`) in the transposed
+    /// conv's own dispatches, as [`crate::ops::conv::Conv::forward_prelu`] does for a conv;
+    /// only where [`ConvTranspose::fuses_prelu`] holds, elsewhere an error.
+    #[allow(clippy::too_many_arguments)]
+    pub fn forward_prelu(
+        &self,
+        kernel: ConvKernel,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        x: &Tensor,
+        w: &Tensor,
+        b: Option<&Tensor>,
+        alpha: &Tensor,
+        y: &Tensor,
+    ) -> Result<()> {
+        const OP: &str = "conv_transpose_forward_prelu";
+        let g = self.geometry(OP, x.shape(), w.shape(), y.shape())?;
+        check_bias(OP, b, g.ci)?;
+        expect_shape(OP, "alpha", alpha, &[g.ci])?;
+        if !self.fuses_prelu(kernel, gpu, x.shape(), w.shape(), y.shape())? {
+            return Err(Error::Invalid(format!("{OP}: this transposed conv on {kernel:?} does not run the texture kernels, which alone apply a PReLU (see ConvTranspose::fuses_prelu)")));
+        }
+        conv_fast::backward_input_act(gpu, pass, &g, x, w, b, Some(alpha), y, conv::operands(gpu, kernel))
+    }
+
+    /// Whether [`ConvTranspose::forward_prelu`] runs this transposed conv on `kernel` and
+    /// `gpu` (input `x_shape`, weights `w_shape`, output `y_shape`).
+    pub fn fuses_prelu(&self, kernel: ConvKernel, gpu: &Gpu, x_shape: &[usize], w_shape: &[usize], y_shape: &[usize]) -> Result<bool> {
+        let g = self.geometry("conv_transpose_forward_prelu", x_shape, w_shape, y_shape)?;
+        Ok(conv::use_fast(kernel, conv::Pass::BackwardInput, &g) && conv_fast::transposed_fuses_prelu(gpu, &g, conv::operands(gpu, kernel)))
     }
 
     /// `dx = dL/dx` from `dy = dL/dy` and the weights on `kernel`: the equivalent forward
