@@ -10,6 +10,7 @@
 #   bounded on a slow machine: mutants of files changed in the last MUTANTS_RECENT commits
 #   (default 5) go first, then the rest from an offset that moves by a day's share each
 #   day, so every mutant runs within a few days. Unset: every mutant, in file order.
+#   Whatever the budget, every mutant is first checked to still apply.
 # Usage: bash ci/mutants.sh [mutants file]. Every edited file is restored, even on Ctrl-C.
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -46,9 +47,18 @@ else
 fi
 
 failed=0 caught=0 pos=0
+# Every mutant must still apply, whether or not today's budget reaches it (a quick sed on a
+# copy): an edit that moved a mutant's line fails CI the day it lands, not a later day.
+stale=()
+for i in "${!lines[@]}"; do
+    line=${lines[i]}; file=${line%% | *}; rest=${line#* | }; expr=${rest% | *}
+    cp "$file" "$work/check" && sed -i "$expr" "$work/check"
+    if cmp -s "$work/check" "$file"; then echo "NOT APPLIED  $file: $expr"; failed=1; stale[i]=1; fi
+done
 start=$(date +%s)
 for i in "${order[@]}"; do
     line=${lines[i]}
+    [[ -n "${stale[i]:-}" ]] && continue
     if [[ -n "$budget" ]] && (( $(date +%s) - start >= budget )); then
         echo "budget of $budget s spent: $(( ${#order[@]} - pos )) of ${#order[@]} mutants left for other days"
         break
