@@ -355,7 +355,8 @@ fn backward_in_one_call_equals_the_two_passes_and_packs_dy_once() {
 /// and `forward_prelu` an error.
 #[test]
 fn texture_forward_with_fused_prelu() {
-    if !conv::Conv::conv3d([1; 3], [1; 3], Padding::Same).fuses_prelu(ConvKernel::Texture, gpu(), &[1, 4, 4, 4, 4], &[4, 4, 1, 1, 1]).unwrap() {
+    // What the texture kernels need, not `fuses_prelu` itself (a broken one would skip the test).
+    if !(gpu().has_subgroups_of_8() && gpu().reads_rgba32f_storage()) {
         eprintln!("skipped: this adapter does not run the texture kernels");
         return;
     }

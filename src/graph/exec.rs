@@ -251,7 +251,7 @@ impl Executor {
         self.run(gpu, Some(loss), Some(adam))
     }
 
-    fn persistent(&self, v: Value) -> bool {
+    pub(super) fn persistent(&self, v: Value) -> bool {
         !matches!(self.graph.values[v.0].kind, Kind::Node) || self.keep[v.0]
     }
 
@@ -550,24 +550,6 @@ impl Executor {
             }
         }
         Ok(total)
-    }
-
-    /// Which nodes also compute the PReLU after them (see `Op::fuses_prelu`): node k when
-    /// node k + 1 is a PReLU of its output, nothing else reads that output (`last`: the
-    /// PReLU's own backward reads it, so in practice this is a forward-only run) and nobody
-    /// asked to keep it. The output then never goes through memory: on lavapipe a PReLU
-    /// pass cost about a tenth of the tiny forward.
-    fn prelu_fusions(&self, gpu: &Gpu, nodes: &[super::Node], last: &[usize]) -> Vec<bool> {
-        let mut fused = vec![false; nodes.len()];
-        for k in 0..nodes.len().saturating_sub(1) {
-            let (n, next) = (&nodes[k], &nodes[k + 1]);
-            if !matches!(next.op, super::Op::Prelu) || next.inputs[0] != n.output || last[n.output.0] != k + 1 || self.persistent(n.output) {
-                continue;
-            }
-            let shapes: Vec<&[usize]> = n.inputs.iter().map(|i| self.graph.values[i.0].shape.as_slice()).collect();
-            fused[k] = n.op.fuses_prelu(gpu, &shapes);
-        }
-        fused
     }
 
     /// A constant 1 to start backward from, in a buffer of its own (never pooled, since

@@ -7,6 +7,7 @@
 
 mod exec;
 mod flat;
+mod fuse;
 mod optim;
 mod op;
 pub mod params;

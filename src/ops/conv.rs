@@ -283,7 +283,7 @@ impl Conv {
         expect_shape(OP, "y", y, &g.y_shape())?;
         expect_shape(OP, "alpha", alpha, &[g.co])?;
         check_bias(OP, b, g.co)?;
-        if !use_fast(kernel, Pass::Forward, &g) || !conv_fast::fuses_prelu(gpu, &g, operands(gpu, kernel)) {
+        if !fuses_prelu(kernel, gpu, &g) {
             return Err(Error::Invalid(format!("{OP}: this conv's forward on {kernel:?} does not run the texture kernels, which alone apply a PReLU (see Conv::fuses_prelu)")));
         }
         conv_fast::forward_act(gpu, pass, &g, x, w, b, Some(alpha), y, operands(gpu, kernel))
@@ -293,8 +293,7 @@ impl Conv {
     /// `x_shape` and weights `w_shape`: where its forward runs the texture kernels (on
     /// lavapipe, every conv of the RenderNet presets).
     pub fn fuses_prelu(&self, kernel: ConvKernel, gpu: &Gpu, x_shape: &[usize], w_shape: &[usize]) -> Result<bool> {
-        let g = self.geometry("conv_forward_prelu", x_shape, w_shape)?;
-        Ok(use_fast(kernel, Pass::Forward, &g) && conv_fast::fuses_prelu(gpu, &g, operands(gpu, kernel)))
+        Ok(fuses_prelu(kernel, gpu, &self.geometry("conv_forward_prelu", x_shape, w_shape)?))
     }
 
     /// `dx = dL/dx` from `dy = dL/dy` (shape of `y`) and the weights on `kernel`; `dx` has
@@ -416,6 +415,12 @@ pub(crate) fn use_fast(kernel: ConvKernel, _pass: Pass, _g: &Geometry) -> bool {
 /// timed or counted step.
 pub fn calibrate(gpu: &Gpu) {
     conv_fast::calibrated(gpu);
+}
+
+/// Whether the forward of `g` on `kernel` runs kernels that apply a PReLU (see
+/// [`Conv::fuses_prelu`]).
+fn fuses_prelu(kernel: ConvKernel, gpu: &Gpu, g: &Geometry) -> bool {
+    use_fast(kernel, Pass::Forward, g) && conv_fast::fuses_prelu(gpu, g, operands(gpu, kernel))
 }
 
 /// The operands the tiled kernels read for `kernel`; `Auto` takes the calibrated choice

@@ -8,6 +8,7 @@ use super::conv::{Geometry, Params};
 use crate::error::{Error, Result};
 use super::conv_pack::{Packed, pack_folded, pack_input, pack_w, pack_x, stage_x};
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
+pub(crate) use super::conv_operands::{Operands, calibrated};
 
 const SHADER: Shader = wgsl!("conv_fast");
 /// The texture family: `conv_tex.wgsl` (packing and forward tiles) and `conv_tex_weight.wgsl`
@@ -80,62 +81,6 @@ fn fold(g: &Geometry, quantum: usize) -> Folded {
 
 pub(super) fn volume(s: [usize; 3]) -> usize {
     s.iter().product()
-}
-
-/// Where the tiled kernels read their packed operands: storage buffers
-/// (`shaders/conv_fast.wgsl`), or textures shared across lanes by subgroup shuffles
-/// (`shaders/conv_tex.wgsl`; far cheaper loads on lavapipe, needs subgroups of 8).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Operands {
-    /// Channels-last storage buffers, one register tile per invocation.
-    Buffers,
-    /// rgba32f read-only storage textures, one register tile per subgroup of 8 lanes.
-    Textures,
-}
-
-/// The operands `ConvKernel::Auto` uses on `gpu`: buffers without subgroups of 8 or read-only
-/// rgba32f storage textures; otherwise `RENDERNET_CONV_OPERANDS` (`buffers` or `textures`) if
-/// set, else textures if they ran a small conv faster and identically (see `measure`), measured once per machine and cached
-/// (`Gpu::calibrated_choice`): which family wins depends on the driver and on the CPU
-/// lavapipe runs on (texture fetches against per-lane buffer loads).
-pub(crate) fn calibrated(gpu: &Gpu) -> Operands {
-    let textures = *gpu.conv_textures.get_or_init(|| {
-        if !gpu.has_subgroups_of_8() || !gpu.reads_rgba32f_storage() {
-            return false;
-        }
-        match std::env::var("RENDERNET_CONV_OPERANDS").as_deref() {
-            Ok("buffers") => false,
-            Ok("textures") => true,
-            // A failed measurement keeps the buffers, which work everywhere.
-            _ => gpu.calibrated_choice("conv-textures-v2", || measure(gpu).unwrap_or(false)),
-        }
-    });
-    if textures { Operands::Textures } else { Operands::Buffers }
-}
-
-/// Whether the texture kernels ran the calibration conv faster than the buffer kernels (best
-/// of 3 wall-clock runs each, after a first run that compiles the pipelines) and gave the same
-/// result: the texture kernels assume subgroups made of consecutive invocations, which no
-/// specification promises, so a device where they disagree keeps the buffers.
-fn measure(gpu: &Gpu) -> Result<bool> {
-    let g = Geometry { n: 1, ci: 16, co: 16, input: [16; 3], output: [16; 3], kernel: [3; 3], stride: [1; 3], pad: [1; 3], rank: 5 };
-    // Small integers times 1/8: every product and sum is exact in f32, so both families agree
-    // to the bit unless one is wrong.
-    let ramp = |len: usize, k: usize| (0..len).map(|i| ((i * k) % 7) as f32 / 8.0 - 0.375).collect::<Vec<_>>();
-    let x = Tensor::from_slice(gpu, &[1, 16, 16, 16, 16], &ramp(16 * 4096, 5))?;
-    let w = Tensor::from_slice(gpu, &[16, 16, 3, 3, 3], &ramp(16 * 16 * 27, 3))?;
-    let ys = [Tensor::zeros(gpu, &[1, 16, 16, 16, 16])?, Tensor::zeros(gpu, &[1, 16, 16, 16, 16])?];
-    let mut best = [f64::INFINITY; 2];
-    for round in 0..4 {
-        for (k, ops) in [Operands::Buffers, Operands::Textures].into_iter().enumerate() {
-            let t = std::time::Instant::now();
-            gpu.run(|pass| forward(gpu, pass, &g, &x, &w, None, &ys[k], ops))?;
-            if round > 0 {
-                best[k] = best[k].min(t.elapsed().as_secs_f64());
-            }
-        }
-    }
-    Ok(best[1] < best[0] && ys[0].to_vec(gpu)? == ys[1].to_vec(gpu)?)
 }
 
 /// Whether `ops` asks for textures and the device can run the texture kernels.
@@ -226,11 +171,35 @@ pub(crate) fn forward(
     forward_act(gpu, pass, g, x, w, b, None, y, ops)
 }
 
-/// Whether [`forward_act`] can apply a PReLU to `g`'s output for `ops`: its forward runs the texture kernels
-/// (the direct ones or the unfolded tiles), whose every forward entry point has a `_prelu` twin.
-pub(crate) fn fuses_prelu(gpu: &Gpu, g: &Geometry, ops: Operands) -> bool {
+/// Which kernels [`forward_act`] runs for `g` on `ops`, with `g`'s fold.
+#[derive(PartialEq)]
+enum ForwardPath {
+    /// `conv_direct_forward*` on the staged input (a conv the texture family would fold).
+    Direct,
+    /// The unfolded texture tiles.
+    Textures,
+    /// The buffer tiles, folded or not.
+    Buffers,
+}
+
+fn forward_path(gpu: &Gpu, g: &Geometry, ops: Operands) -> (ForwardPath, Folded) {
     let f = fold(g, 4);
-    direct_fits(gpu, ops, g, &f) || (textures_fit(gpu, ops, &f.g, f.g.ci.div_ceil(4) * 4) && f.fold() == 1)
+    let path = if direct_fits(gpu, ops, g, &f) {
+        ForwardPath::Direct
+    } else if textures_fit(gpu, ops, &f.g, f.g.ci.div_ceil(4) * 4) && f.fold() == 1 {
+        // A fold on textures runs the direct kernels or nothing: the texture packing never folds.
+        ForwardPath::Textures
+    } else {
+        ForwardPath::Buffers
+    };
+    (path, f)
+}
+
+/// Whether [`forward_act`] can apply a PReLU to `g`'s output for `ops`: its forward runs the
+/// texture kernels (the direct ones or the unfolded tiles), whose every forward entry point
+/// has a `_prelu` twin.
+pub(crate) fn fuses_prelu(gpu: &Gpu, g: &Geometry, ops: Operands) -> bool {
+    forward_path(gpu, g, ops).0 != ForwardPath::Buffers
 }
 
 /// [`forward`] followed by PReLU with slopes `alpha` (`[Cout]`, one per output channel) in
@@ -247,13 +216,11 @@ pub(crate) fn forward_act(
     y: &Tensor,
     ops: Operands,
 ) -> Result<()> {
-    let f = fold(g, 4);
-    let cpad = f.g.ci.div_ceil(4) * 4;
-    if direct_fits(gpu, ops, g, &f) {
+    let (path, f) = forward_path(gpu, g, ops);
+    if path == ForwardPath::Direct {
         return forward_direct(gpu, pass, g, x, w, b, alpha, y);
     }
-    // A fold on textures runs the direct kernels or nothing: the texture packing never folds.
-    let tex = textures_fit(gpu, ops, &f.g, cpad) && f.fold() == 1;
+    let (cpad, tex) = (f.g.ci.div_ceil(4) * 4, path == ForwardPath::Textures);
     let xp = pack_x(gpu, pass, g, &f, x, cpad, tex)?;
     let p = params(&f.g, cpad);
     let wp = pack_w(gpu, pass, Params { fold: f.fold() as u32, ..p }, w, tex)?;

@@ -152,7 +152,7 @@ impl ConvTranspose {
         let g = self.geometry(OP, x.shape(), w.shape(), y.shape())?;
         check_bias(OP, b, g.ci)?;
         expect_shape(OP, "alpha", alpha, &[g.ci])?;
-        if !self.fuses_prelu(kernel, gpu, x.shape(), w.shape(), y.shape())? {
+        if !fuses_prelu(kernel, gpu, &g) {
             return Err(Error::Invalid(format!("{OP}: this transposed conv on {kernel:?} does not run the texture kernels, which alone apply a PReLU (see ConvTranspose::fuses_prelu)")));
         }
         conv_fast::backward_input_act(gpu, pass, &g, x, w, b, Some(alpha), y, conv::operands(gpu, kernel))
@@ -161,8 +161,7 @@ impl ConvTranspose {
     /// Whether [`ConvTranspose::forward_prelu`] runs this transposed conv on `kernel` and
     /// `gpu` (input `x_shape`, weights `w_shape`, output `y_shape`).
     pub fn fuses_prelu(&self, kernel: ConvKernel, gpu: &Gpu, x_shape: &[usize], w_shape: &[usize], y_shape: &[usize]) -> Result<bool> {
-        let g = self.geometry("conv_transpose_forward_prelu", x_shape, w_shape, y_shape)?;
-        Ok(conv::use_fast(kernel, conv::Pass::BackwardInput, &g) && conv_fast::transposed_fuses_prelu(gpu, &g, conv::operands(gpu, kernel)))
+        Ok(fuses_prelu(kernel, gpu, &self.geometry("conv_transpose_forward_prelu", x_shape, w_shape, y_shape)?))
     }
 
     /// `dx = dL/dx` from `dy = dL/dy` and the weights on `kernel`: the equivalent forward
@@ -201,4 +200,10 @@ impl ConvTranspose {
     pub fn backward_bias(&self, gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, dy: &Tensor, db: &Tensor) -> Result<()> {
         conv::backward_bias(gpu, pass, dy, db)
     }
+}
+
+/// Whether the transposed conv of equivalent forward conv `g` on `kernel` runs kernels that
+/// apply a PReLU (see [`ConvTranspose::fuses_prelu`]).
+fn fuses_prelu(kernel: ConvKernel, gpu: &Gpu, g: &Geometry) -> bool {
+    conv::use_fast(kernel, conv::Pass::BackwardInput, g) && conv_fast::transposed_fuses_prelu(gpu, g, conv::operands(gpu, kernel))
 }

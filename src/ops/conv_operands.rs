@@ -1,0 +1,63 @@
+//! Which family of tiled conv kernels a device runs: buffers or textures ([`Operands`]),
+//! chosen once per machine by timing both on a small conv ([`calibrated`]).
+
+use super::conv::Geometry;
+use super::conv_fast::forward;
+use crate::error::Result;
+use crate::gpu::{Gpu, Tensor};
+
+/// Where the tiled kernels read their packed operands: storage buffers
+/// (`shaders/conv_fast.wgsl`), or textures shared across lanes by subgroup shuffles
+/// (`shaders/conv_tex.wgsl`; far cheaper loads on lavapipe, needs subgroups of 8).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Operands {
+    /// Channels-last storage buffers, one register tile per invocation.
+    Buffers,
+    /// rgba32f read-only storage textures, one register tile per subgroup of 8 lanes.
+    Textures,
+}
+
+/// The operands `ConvKernel::Auto` uses on `gpu`: buffers without subgroups of 8 or read-only
+/// rgba32f storage textures; otherwise `RENDERNET_CONV_OPERANDS` (`buffers` or `textures`) if
+/// set, else textures if they ran a small conv faster and identically (see `measure`), measured once per machine and cached
+/// (`Gpu::calibrated_choice`): which family wins depends on the driver and on the CPU
+/// lavapipe runs on (texture fetches against per-lane buffer loads).
+pub(crate) fn calibrated(gpu: &Gpu) -> Operands {
+    let textures = *gpu.conv_textures.get_or_init(|| {
+        if !gpu.has_subgroups_of_8() || !gpu.reads_rgba32f_storage() {
+            return false;
+        }
+        match std::env::var("RENDERNET_CONV_OPERANDS").as_deref() {
+            Ok("buffers") => false,
+            Ok("textures") => true,
+            // A failed measurement keeps the buffers, which work everywhere.
+            _ => gpu.calibrated_choice("conv-textures-v2", || measure(gpu).unwrap_or(false)),
+        }
+    });
+    if textures { Operands::Textures } else { Operands::Buffers }
+}
+
+/// Whether the texture kernels ran the calibration conv faster than the buffer kernels (best
+/// of 3 wall-clock runs each, after a first run that compiles the pipelines) and gave the same
+/// result: the texture kernels assume subgroups made of consecutive invocations, which no
+/// specification promises, so a device where they disagree keeps the buffers.
+fn measure(gpu: &Gpu) -> Result<bool> {
+    let g = Geometry { n: 1, ci: 16, co: 16, input: [16; 3], output: [16; 3], kernel: [3; 3], stride: [1; 3], pad: [1; 3], rank: 5 };
+    // Small integers times 1/8: every product and sum is exact in f32, so both families agree
+    // to the bit unless one is wrong.
+    let ramp = |len: usize, k: usize| (0..len).map(|i| ((i * k) % 7) as f32 / 8.0 - 0.375).collect::<Vec<_>>();
+    let x = Tensor::from_slice(gpu, &[1, 16, 16, 16, 16], &ramp(16 * 4096, 5))?;
+    let w = Tensor::from_slice(gpu, &[16, 16, 3, 3, 3], &ramp(16 * 16 * 27, 3))?;
+    let ys = [Tensor::zeros(gpu, &[1, 16, 16, 16, 16])?, Tensor::zeros(gpu, &[1, 16, 16, 16, 16])?];
+    let mut best = [f64::INFINITY; 2];
+    for round in 0..4 {
+        for (k, ops) in [Operands::Buffers, Operands::Textures].into_iter().enumerate() {
+            let t = std::time::Instant::now();
+            gpu.run(|pass| forward(gpu, pass, &g, &x, &w, None, &ys[k], ops))?;
+            if round > 0 {
+                best[k] = best[k].min(t.elapsed().as_secs_f64());
+            }
+        }
+    }
+    Ok(best[1] < best[0] && ys[0].to_vec(gpu)? == ys[1].to_vec(gpu)?)
+}
