@@ -120,7 +120,17 @@ fn concatenates_along_axis_0_and_narrows_like_the_reference() {
     let w = f32_round(&rng.vec(n * len * s, -1.0, 1.0));
     let (dy, dx) = (upload(&[n, len, 3, 5], &w), upload(&[n, c, 3, 5], &vec![7.0; n * c * s]));
     run(|p| concat::narrow_backward(gpu(), p, &dy, start, &dx));
-    assert_close("narrow backward", &download(&dx), &fd_grad(&x, |x| dot(&w, &narrow_ref(x, n, c, s, start, len))), 1e-6, 1e-6);
+    let fd = fd_grad(&x, |x| dot(&w, &narrow_ref(x, n, c, s, start, len)));
+    assert_close("narrow backward", &download(&dx), &fd, 1e-6, 1e-6);
+    // Added into a gradient already there (another range's): `acc` + the same gradient, the
+    // channels outside the range untouched.
+    let acc = f32_round(&rng.vec(n * c * s, -1.0, 1.0));
+    let tacc = upload(&[n, c, 3, 5], &acc);
+    run(|p| concat::narrow_backward_add(gpu(), p, &dy, start, &tacc));
+    let want: Vec<f64> = acc.iter().zip(&fd).map(|(a, g)| a + g).collect();
+    assert_close("narrow backward added", &download(&tacc), &want, 1e-6, 1e-6);
+    let err = gpu().run(|p| concat::narrow_backward_add(gpu(), p, &dy, 4, &tacc)).unwrap_err();
+    assert!(err.to_string().contains("start + len <= C"), "{err}");
     assert!(concat::narrow_shape(&[2, 7, 3], 5, 3).unwrap_err().to_string().contains("start + len <= C"));
 }
 

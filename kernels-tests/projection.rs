@@ -62,3 +62,39 @@ fn projection_rejects_mismatched_weights() {
     let err = gpu().run(|p| projection::forward(ConvKernel::Auto, gpu(), p, &tx, &tw, &tb, &ty)).unwrap_err();
     assert!(err.to_string().contains("K = C*D = 6"), "{err}");
 }
+
+/// The projection then a PReLU in the projection's own dispatches (what a forward-only graph
+/// run does with the projection unit's activation) against the f64 projection then PReLU:
+/// slopes 0, negative and above 1; the plain forward is unchanged; the reference kernel,
+/// which applies no PReLU, refuses with a clear error.
+#[test]
+fn texture_projection_with_fused_prelu() {
+    // What the texture kernels need, not `fuses_prelu` itself (a broken one would skip the test).
+    if !(gpu().has_subgroups_of_8() && gpu().reads_rgba32f_storage()) {
+        eprintln!("skipped: this adapter does not run the texture kernels");
+        return;
+    }
+    for (n, c, d, h, w, o, seed) in [(2usize, 3usize, 5usize, 4usize, 7usize, 6usize, 21u64), (1, 7, 3, 3, 11, 19, 22)] {
+        let (k, s) = (c * d, h * w);
+        let mut rng = Rng(seed);
+        let x = f32_round(&rng.vec(n * k * s, -1.0, 1.0));
+        let wt = f32_round(&rng.vec(o * k, -0.5, 0.5));
+        let b = f32_round(&rng.vec(o, -0.5, 0.5));
+        let mut alpha = f32_round(&rng.vec(o, -0.5, 1.5));
+        alpha[0] = 0.0;
+        let (xs, ws) = ([n, c, d, h, w], [o, k, 1, 1]);
+        assert!(projection::fuses_prelu(ConvKernel::Texture, gpu(), &xs, &ws).unwrap(), "{xs:?} should fuse");
+        let (tx, tw, tb, ta, ty) = (upload(&xs, &x), upload(&ws, &wt), upload(&[o], &b), upload(&[o], &alpha), zeros(&[n, o, h, w]));
+        run(|p| projection::forward_prelu(ConvKernel::Texture, gpu(), p, &tx, &tw, &tb, &ta, &ty));
+        let plain = proj_ref(&x, &wt, &b, n, k, o, s);
+        let want = reference::activations::prelu(&plain, &alpha, o, s);
+        assert_close(&format!("{xs:?} projection + prelu"), &download(&ty), &want, 1e-5, 1e-4);
+        let y = zeros(&[n, o, h, w]);
+        run(|p| projection::forward(ConvKernel::Texture, gpu(), p, &tx, &tw, &tb, &y));
+        assert_close(&format!("{xs:?} projection"), &download(&y), &plain, 1e-5, 1e-4);
+    }
+    let (x, w, b, a, y) = (zeros(&[1, 2, 3, 4, 4]), zeros(&[5, 6, 1, 1]), zeros(&[5]), zeros(&[5]), zeros(&[1, 5, 4, 4]));
+    assert!(!projection::fuses_prelu(ConvKernel::Reference, gpu(), x.shape(), w.shape()).unwrap());
+    let err = gpu().run(|p| projection::forward_prelu(ConvKernel::Reference, gpu(), p, &x, &w, &b, &a, &y)).unwrap_err();
+    assert!(err.to_string().contains("fuses_prelu"), "{err}");
+}

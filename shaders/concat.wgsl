@@ -5,7 +5,8 @@
 // backward is the same copy the other way round). Concatenation along axis 0 (sibling
 // layers' weights [O, ...] into one) is the case N = 1. Narrowing (a channel range of a
 // tensor) is concat's backward copy; its own backward, `narrow_backward`, writes the whole
-// gradient: the part's gradient on its channels, zero elsewhere.
+// gradient: the part's gradient on its channels, zero elsewhere; `narrow_backward_add` adds
+// a part's gradient into its channels of a gradient already written (by another part).
 
 struct Params { n: u32, cp: u32, cy: u32, s: u32, c0: u32 }
 @group(0) @binding(0) var<uniform> p: Params;
@@ -43,4 +44,11 @@ fn narrow_backward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
     // Outside the range, j is a valid index whose value select drops.
     let j = ((i / (p.s * p.cy)) * p.cp + select(0u, c - p.c0, inside)) * p.s + i % p.s;
     dst[i] = select(0.0, src[j], inside);
+}
+
+@compute @workgroup_size(64)
+fn narrow_backward_add(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    if (i >= p.n * p.cp * p.s) { return; }
+    dst[whole(i)] += src[i];
 }

@@ -459,7 +459,7 @@ fn a_frozen_backward_reuses_its_packings_and_weights_that_are_inputs_never_do() 
 // (`Executor::prelu_fusions`): x [1, 1, 9, 10, 11] -> conv3d 1->8 5^3 s2 (direct kernels) ->
 // prelu -> conv3d 8->16 3^3 (16-channel tile) -> prelu -> y, the second conv's output also
 // feeding `side` (so that PReLU is not fused: its input is read twice); y + side -> a
-// transposed conv -> prelu -> z.
+// transposed conv -> prelu -> z -> the projection -> prelu -> q.
 #[test]
 fn a_forward_only_run_fuses_conv_and_prelu_with_identical_values() {
     use rendernet::ops::conv::{Conv, ConvKernel, Padding};
@@ -486,18 +486,25 @@ fn a_forward_only_run_fuses_conv_and_prelu_with_identical_values() {
     let a3 = g.param("a3.alpha", &[4], Init::Constant(0.5)).unwrap();
     let t3 = g.apply("t3", Op::ConvTranspose(ConvTranspose::conv3d([4, 4, 4], [2, 2, 2], Padding::Same)), &[total, w3, b3]).unwrap();
     let z = g.apply("a3", Op::Prelu, &[t3, a3]).unwrap();
+    // And the projection unit (depth folded into channels, K = 40 -> 6) then a PReLU: q.
+    let w4 = g.param("p4.weight", &[6, 40, 1, 1], Init::Xavier).unwrap();
+    let b4 = g.param("p4.bias", &[6], Init::Constant(0.03)).unwrap();
+    let a4 = g.param("a4.alpha", &[6], Init::Constant(-0.4)).unwrap();
+    let p4 = g.apply("p4", Op::Projection, &[z, w4, b4]).unwrap();
+    let q = g.apply("a4", Op::Prelu, &[p4, a4]).unwrap();
     let fuses = Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same).fuses_prelu(ConvKernel::Auto, gpu(), &[1, 1, 9, 10, 11], &[8, 1, 5, 5, 5]).unwrap();
     let run = |keep_c1: bool, backward: bool| {
         let mut ex = Executor::new(gpu(), g.clone(), 3).unwrap();
         ex.feed(gpu(), x, &f32v(&Rng(8).vec(9 * 10 * 11, -1.0, 1.0))).unwrap();
         ex.keep(total);
-        ex.keep(z);
+        ex.keep(q);
         if keep_c1 {
             ex.keep(c1);
             ex.keep(t3);
+            ex.keep(p4);
         }
         let stats = if backward { ex.backward(gpu(), loss).unwrap() } else { ex.forward(gpu()).unwrap() };
-        ([ex.read(gpu(), total).unwrap(), ex.read(gpu(), z).unwrap()], stats.dispatches)
+        ([ex.read(gpu(), total).unwrap(), ex.read(gpu(), q).unwrap()], stats.dispatches)
     };
     let (fused, d_fused) = run(false, false);
     // The same forward without fusion: c1's output kept for the caller, or a backward run
@@ -506,13 +513,81 @@ fn a_forward_only_run_fuses_conv_and_prelu_with_identical_values() {
     let (with_backward, _) = run(false, true);
     assert_eq!(fused, kept, "fused against c1's output kept");
     assert_eq!(fused, with_backward, "fused against a backward run's forward");
-    // Two PReLUs fused on lavapipe (c1 -> a1 and t3 -> a3; a2's input c2 is read by `side`
-    // too): their dispatches are gone; elsewhere nothing fuses and nothing changes.
+    // Three PReLUs fused on lavapipe (c1 -> a1, t3 -> a3 and p4 -> a4; a2's input c2 is read
+    // by `side` too): their dispatches are gone; elsewhere nothing fuses and nothing changes.
     let prelu_dispatches = {
         let (t, a, o) = (upload(&[1, 8, 5, 5, 6], &vec![0.5; 1200]), upload(&[8], &[0.1; 8]), zeros(&[1, 8, 5, 5, 6]));
         let d0 = gpu().dispatch_count();
         common::run(|p| rendernet::ops::prelu::forward(gpu(), p, &t, &a, &o));
         gpu().dispatch_count() - d0
     };
-    assert_eq!(d_kept - d_fused, if fuses { 2 * prelu_dispatches } else { 0 }, "dispatches fused {d_fused}, kept {d_kept}");
+    assert_eq!(d_kept - d_fused, if fuses { 3 * prelu_dispatches } else { 0 }, "dispatches fused {d_fused}, kept {d_kept}");
+}
+
+// Channel ranges of a batch of one are views of their input's buffer, not copies
+// (`Executor::narrow_views`): x [n, 5, h, w] -> a joint 3x3 conv to 6 channels -> three
+// ranges (3, 2 and 1 channels) and a range of the second -> sigmoids; between the ranges and
+// their readers a second conv makes a tensor of the joint output's size, which would take the
+// joint output's buffer if the views did not keep it alive. Against the same graph with the ranges kept for the
+// caller (copies): equal to the bit, forward and gradients, with one dispatch fewer per range
+// where the ranges can be views (n = 1 and channel planes a multiple of the binding alignment:
+// 12 x 16 floats), none fewer where they cannot (a batch of two; with 9 x 7 floats a plane
+// only the range at channel 0 starts aligned).
+#[test]
+fn channel_ranges_of_one_item_are_views_with_identical_values_and_gradients() {
+    use rendernet::ops::conv::{Conv, Padding};
+    let conv = || Op::Conv(Conv::conv2d([3, 3], [1, 1], Padding::Same));
+    for (n, h, w) in [(1usize, 12usize, 16usize), (2, 12, 16), (1, 9, 7)] {
+        let mut g = Graph::new();
+        let x = g.input("x", &[n, 5, h, w]).unwrap();
+        let wj = g.param("joint.weight", &[6, 5, 3, 3], Init::Xavier).unwrap();
+        let bj = g.param("joint.bias", &[6], Init::Constant(0.1)).unwrap();
+        let wz = g.param("other.weight", &[6, 5, 3, 3], Init::Xavier).unwrap();
+        let bz = g.param("other.bias", &[6], Init::Constant(-0.1)).unwrap();
+        let joint = g.apply("joint", conv(), &[x, wj, bj]).unwrap();
+        let (starts, lens) = ([0usize, 3, 5], [3usize, 2, 1]);
+        let mut ranges: Vec<Value> = (0..3).map(|k| g.apply(&format!("r{k}"), Op::Narrow(starts[k], lens[k]), &[joint]).unwrap()).collect();
+        // A range of a range: channel 4 of the joint output (a view of a view where both align).
+        ranges.push(g.apply("r3", Op::Narrow(1, 1), &[ranges[1]]).unwrap());
+        let other = g.apply("other", conv(), &[x, wz, bz]).unwrap();
+        let mut outs = vec![g.apply("other.sigmoid", Op::Sigmoid, &[other]).unwrap()];
+        outs.extend(ranges.iter().enumerate().map(|(k, &r)| g.apply(&format!("s{k}"), Op::Sigmoid, &[r]).unwrap()));
+        let mut loss = None;
+        for (k, &o) in outs.iter().enumerate() {
+            let t = g.input(&format!("t{k}"), &g.info(o).shape.clone()).unwrap();
+            let l = g.apply(&format!("loss{k}"), Op::Loss(Loss::Mse), &[o, t]).unwrap();
+            loss = Some(loss.map_or(l, |prev| g.apply(&format!("sum{k}"), Op::Add, &[prev, l]).unwrap()));
+        }
+        let loss = loss.unwrap();
+        let run = |copies: bool, backward: bool| {
+            let mut ex = Executor::new(gpu(), g.clone(), 3).unwrap();
+            ex.feed(gpu(), x, &f32v(&Rng(31).vec(n * 5 * h * w, -1.0, 1.0))).unwrap();
+            for (k, &o) in outs.iter().enumerate() {
+                let t = g.value(&format!("t{k}")).unwrap();
+                ex.feed(gpu(), t, &f32v(&Rng(40 + k as u64).vec(g.info(o).shape.iter().product(), 0.0, 1.0))).unwrap();
+                ex.keep(o);
+            }
+            if copies {
+                ranges.iter().for_each(|&r| ex.keep(r));
+            }
+            ex.want_grad(x);
+            let stats = if backward { ex.backward(gpu(), loss).unwrap() } else { ex.forward(gpu()).unwrap() };
+            let mut got: Vec<Vec<f32>> = outs.iter().map(|&o| ex.read(gpu(), o).unwrap()).collect();
+            if backward {
+                got.push(ex.grad(gpu(), x).unwrap());
+                got.extend([wj, bj, wz, bz].iter().map(|&p| ex.grad(gpu(), p).unwrap()));
+            }
+            (got, stats.dispatches)
+        };
+        // Ranges whose first element meets the binding alignment (on any device, start 0 does).
+        let align = gpu().limits.min_storage_buffer_offset_alignment.max(16) as usize;
+        let aligned = |s: usize| n == 1 && (s * h * w * 4).is_multiple_of(align);
+        let views = starts.iter().chain(&[1]).filter(|&&s| aligned(s)).count() as u64;
+        assert_eq!(views, if n == 1 { if h * w == 192 { 4 } else { 1 } } else { 0 }, "alignment {align}");
+        for backward in [false, true] {
+            let ((viewed, d_viewed), (copied, d_copied)) = (run(false, backward), run(true, backward));
+            assert_eq!(viewed, copied, "n {n}, {h}x{w}, backward {backward}: ranges as views against copies");
+            assert_eq!(d_copied - d_viewed, views, "n {n}, {h}x{w}, backward {backward}: dispatches");
+        }
+    }
 }

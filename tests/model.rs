@@ -455,9 +455,12 @@ fn profiled_runs_time_every_op_in_schedule_order() {
     // The profiler's own empty dispatches (after each timestamp) are nobody's work.
     assert_eq!(stats.dispatches, unprofiled, "profiling changed the step's dispatch count");
     let t = ex.op_times();
-    // Every dispatch of the step is counted against one op, and every op dispatches.
+    // Every dispatch of the step is counted against one op, and every op dispatches but the
+    // heads' channel ranges, views of the joint head's output in the forward (16x16 planes).
     assert_eq!(t.iter().map(|t| t.dispatches).sum::<u64>(), stats.dispatches, "{t:?}");
-    assert!(t.iter().all(|t| t.dispatches > 0), "{t:?}");
+    let view = |t: &&rendernet::graph::profile::OpTime| t.kind == "narrow" && t.name.ends_with(" forward");
+    assert!(t.iter().filter(|t| !view(t)).all(|t| t.dispatches > 0), "{t:?}");
+    assert!(t.iter().filter(view).all(|t| t.dispatches == 0), "{t:?}");
     assert!(t.iter().all(|t| t.ns.is_finite() && t.ns >= 0.0), "{t:?}");
     assert_eq!(t[..forward.len()].iter().map(|t| t.name.clone()).collect::<Vec<_>>(), forward);
     let backward: Vec<&str> = t[forward.len()..t.len() - 1].iter().map(|t| t.name.as_str()).collect();

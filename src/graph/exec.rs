@@ -315,6 +315,7 @@ impl Executor {
                 last_grad[n.output.0] = last_grad[n.output.0].max(pos);
             }
         }
+        self.keep_viewed_alive(gpu, &nodes, &mut last);
         // Free what the previous run kept for reading: it has been read or never will be.
         for v in 0..nv {
             if matches!(self.graph.values[v].kind, Kind::Node) {
@@ -434,10 +435,15 @@ impl Executor {
         let f = nodes.len();
         let mut total = 0u64;
         let fused = self.prelu_fusions(gpu, nodes, last);
+        let views = self.narrow_views(gpu, nodes);
         for (k, n) in nodes.iter().enumerate() {
-            if k > 0 && fused[k - 1] {
-                // This PReLU's output was written by the node before it (a profile shows it
-                // at about 0 ms, its work in that node's time).
+            // Nodes that dispatch nothing (a profile shows them at about 0 ms): a PReLU the
+            // conv before it wrote, a channel range that is a view of its input.
+            let skipped = k > 0 && fused[k - 1] || views[k].is_some();
+            if let Some(offset) = views[k] {
+                self.values[n.output.0] = Some(self.view_of(n, offset).map_err(|e| node_err(&n.name, e))?);
+            }
+            if skipped {
                 if let Some(p) = &mut self.profiler {
                     p.mark(gpu, pass, format!("{} forward", n.name), n.op.name());
                 }
@@ -490,12 +496,20 @@ impl Executor {
             // Each input wanting a gradient gets its own tensor on first contribution;
             // later contributions go to a temporary and are summed in.
             let mut targets: Vec<Option<(Tensor, bool)>> = Vec::new(); // (tensor, accumulate)
+            let mut narrow_into = None;
             for (j, i) in n.inputs.iter().enumerate() {
                 if !(self.grad_wanted[i.0] || produced_by_bw[i.0]) || !n.op.differentiable(j) {
                     targets.push(None);
                     continue;
                 }
                 let seen = self.grads[i.0].is_some() || n.inputs[..j].contains(i);
+                if let (true, super::Op::Narrow(start, _)) = (seen, &n.op) {
+                    // A channel range adds its gradient into its channels of the sum in place
+                    // rather than writing a whole-size temporary (mostly zeros) to add in.
+                    narrow_into = Some(*start);
+                    targets.push(None);
+                    continue;
+                }
                 let shape = self.graph.values[i.0].shape.clone();
                 // A parameter's gradient lives in the flat gradient buffer (see `Flat`).
                 let t = if !seen && matches!(self.graph.values[i.0].kind, Kind::Param(_)) {
@@ -509,7 +523,10 @@ impl Executor {
                 }
                 targets.push(Some((t, seen)));
             }
-            if matches!(n.op, super::Op::Add) {
+            if let Some(start) = narrow_into {
+                let acc = self.grads[n.inputs[0].0].as_ref().expect("seen above");
+                ops::concat::narrow_backward_add(gpu, pass, &dy, start, acc).map_err(|e| node_err(&n.name, e))?;
+            } else if matches!(n.op, super::Op::Add) {
                 for t in targets.iter().flatten() {
                     ops::add::copy(gpu, pass, &dy, &t.0)?;
                 }

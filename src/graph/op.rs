@@ -235,11 +235,13 @@ impl Op {
     }
 
     /// Whether this node's forward, on inputs of `shapes`, can apply a PReLU that follows it
-    /// (slopes `[Cout]`) in its own dispatches: a conv or transposed conv whose forward runs the
-    /// texture kernels (`Conv::fuses_prelu`, `ConvTranspose::fuses_prelu`).
+    /// (slopes `[Cout]`) in its own dispatches: a conv, transposed conv or projection whose
+    /// forward runs the texture kernels (`Conv::fuses_prelu`, `ConvTranspose::fuses_prelu`,
+    /// `projection::fuses_prelu`).
     pub(crate) fn fuses_prelu(&self, gpu: &Gpu, shapes: &[&[usize]]) -> bool {
         match self {
             Op::Conv(cv) => cv.fuses_prelu(AUTO, gpu, shapes[0], shapes[1]).unwrap_or(false),
+            Op::Projection => ops::projection::fuses_prelu(AUTO, gpu, shapes[0], shapes[1]).unwrap_or(false),
             Op::ConvTranspose(cv) => cv.output_shape(shapes[0], shapes[1]).and_then(|y| cv.fuses_prelu(AUTO, gpu, shapes[0], shapes[1], &y)).unwrap_or(false),
             _ => false,
         }
@@ -250,6 +252,7 @@ impl Op {
     pub(crate) fn forward_prelu(&self, c: &mut Ctx, x: &[&Tensor], alpha: &Tensor, y: &Tensor) -> Result<()> {
         match self {
             Op::Conv(cv) => cv.forward_prelu(AUTO, c.gpu, c.pass, x[0], x[1], Some(x[2]), alpha, y),
+            Op::Projection => ops::projection::forward_prelu(AUTO, c.gpu, c.pass, x[0], x[1], x[2], alpha, y),
             Op::ConvTranspose(cv) => cv.forward_prelu(AUTO, c.gpu, c.pass, x[0], x[1], Some(x[2]), alpha, y),
             _ => Err(crate::error::Error::Invalid(format!("internal: {} does not fuse a PReLU", self.name()))),
         }

@@ -136,6 +136,15 @@ pub fn narrow_backward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, dy: &Tensor,
     gpu.dispatch(pass, SHADER, "narrow_backward", &p, &[Arg::R(dy), Arg::W(dx)], grid_1d(dx.numel() as u64, 64)?)
 }
 
+/// Adds the gradient of [`narrow`] into `dx`: `dx` += `dy` on channels `start ..`, the
+/// other channels untouched (a later channel range's gradient summed into the first's).
+pub fn narrow_backward_add(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, dy: &Tensor, start: usize, dx: &Tensor) -> Result<()> {
+    let len = dy.shape().get(1).copied().unwrap_or(0);
+    expect_shape("narrow", "dy", dy, &narrow_shape(dx.shape(), start, len)?)?;
+    let p = narrow_params(dx.shape(), start, len);
+    gpu.dispatch(pass, SHADER, "narrow_backward_add", &p, &[Arg::R(dy), Arg::W(dx)], grid_1d(dy.numel() as u64, 64)?)
+}
+
 /// `y = [a, b, ...]` along axis 1.
 pub fn forward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, parts: &[&Tensor], y: &Tensor) -> Result<()> {
     forward_along(gpu, pass, 1, parts, y)

@@ -8,7 +8,7 @@
 
 use super::conv::{self, ConvKernel, Geometry, Pass};
 use super::{expect_shape, reduce};
-use crate::error::{Result, shape_err};
+use crate::error::{Error, Result, shape_err};
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
 const SHADER: Shader = wgsl!("projection");
@@ -92,6 +92,37 @@ pub fn forward(
     }
     let args = [Arg::R(x), Arg::R(w), Arg::R(b), Arg::W(y)];
     gpu.dispatch(pass, SHADER, "projection_forward", &d.params(), &args, grid_1d(y.numel() as u64, 64)?)
+}
+
+/// `y = prelu(projection(x, w) + b, alpha)`, one slope per output channel (`alpha` `[O]`),
+/// in the projection's own dispatch, as [`crate::ops::conv::Conv::forward_prelu`] does for a
+/// conv; only where [`fuses_prelu`] holds, elsewhere an error.
+#[allow(clippy::too_many_arguments)]
+pub fn forward_prelu(
+    kernel: ConvKernel,
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    x: &Tensor,
+    w: &Tensor,
+    b: &Tensor,
+    alpha: &Tensor,
+    y: &Tensor,
+) -> Result<()> {
+    let d = ProjectionDims::new(x.shape(), w.shape())?;
+    expect_shape("projection", "bias", b, &[d.o])?;
+    expect_shape("projection", "alpha", alpha, &[d.o])?;
+    expect_shape("projection", "output", y, &d.output_shape())?;
+    let g = d.geometry();
+    if !conv::fuses_prelu(kernel, gpu, &g) {
+        return Err(Error::Invalid(format!("projection_forward_prelu: this projection on {kernel:?} does not run the texture kernels, which alone apply a PReLU (see projection::fuses_prelu)")));
+    }
+    conv::dispatch_forward_prelu(kernel, gpu, pass, &g, x, w, Some(b), alpha, y)
+}
+
+/// Whether [`forward_prelu`] runs the projection of input `x_shape` and weights `w_shape` on
+/// `kernel` and `gpu`: where its forward runs the texture kernels.
+pub fn fuses_prelu(kernel: ConvKernel, gpu: &Gpu, x_shape: &[usize], w_shape: &[usize]) -> Result<bool> {
+    Ok(conv::fuses_prelu(kernel, gpu, &ProjectionDims::new(x_shape, w_shape)?.geometry()))
 }
 
 /// `dx = wᵀ dy` (shape of `x`) on `kernel`.
