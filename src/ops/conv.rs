@@ -286,7 +286,7 @@ impl Conv {
         if !fuses_prelu(kernel, gpu, &g) {
             return Err(Error::Invalid(format!("{OP}: this conv's forward on {kernel:?} does not run the texture kernels, which alone apply a PReLU (see Conv::fuses_prelu)")));
         }
-        dispatch_forward_prelu(kernel, gpu, pass, &g, x, w, b, alpha, y)
+        conv_fast::forward_act(gpu, pass, &g, x, w, b, Some(alpha), y, operands(gpu, kernel))
     }
 
     /// Whether [`Conv::forward_prelu`] runs this conv on `kernel` and `gpu` for input
@@ -450,23 +450,6 @@ pub(crate) fn dispatch_forward(
     }
     let args = [Arg::R(x), Arg::R(w), bias_arg(b), Arg::W(y)];
     reference(gpu, pass, "conv_forward", g, b.is_some(), &args, y.numel())
-}
-
-/// Records the forward of `g` then a PReLU of slopes `alpha` in the same dispatches (shapes
-/// checked by the caller, and [`fuses_prelu`]).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn dispatch_forward_prelu(
-    kernel: ConvKernel,
-    gpu: &Gpu,
-    pass: &mut wgpu::ComputePass<'_>,
-    g: &Geometry,
-    x: &Tensor,
-    w: &Tensor,
-    b: Option<&Tensor>,
-    alpha: &Tensor,
-    y: &Tensor,
-) -> Result<()> {
-    conv_fast::forward_act(gpu, pass, g, x, w, b, Some(alpha), y, operands(gpu, kernel))
 }
 
 /// Records the backward-input conv of `g` (shapes checked by the caller): `dx = conv^T(dy,

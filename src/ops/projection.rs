@@ -72,6 +72,14 @@ impl ProjectionDims {
     }
 }
 
+/// The dimensions of a forward, its bias and output checked against them.
+fn checked(x: &Tensor, w: &Tensor, b: &Tensor, y: &Tensor) -> Result<ProjectionDims> {
+    let d = ProjectionDims::new(x.shape(), w.shape())?;
+    expect_shape("projection", "bias", b, &[d.o])?;
+    expect_shape("projection", "output", y, &d.output_shape())?;
+    Ok(d)
+}
+
 /// `y[n,o] = Σ_k w[o,k] x[n,k] + b[o]` per pixel, on `kernel` (see [`ConvKernel`]; `Auto`
 /// unless comparing; `Reference` is `projection.wgsl`).
 pub fn forward(
@@ -83,9 +91,7 @@ pub fn forward(
     b: &Tensor,
     y: &Tensor,
 ) -> Result<()> {
-    let d = ProjectionDims::new(x.shape(), w.shape())?;
-    expect_shape("projection", "bias", b, &[d.o])?;
-    expect_shape("projection", "output", y, &d.output_shape())?;
+    let d = checked(x, w, b, y)?;
     let g = d.geometry();
     if conv::use_fast(kernel, Pass::Forward, &g) {
         return conv::dispatch_forward(kernel, gpu, pass, &g, x, w, Some(b), y);
@@ -108,15 +114,13 @@ pub fn forward_prelu(
     alpha: &Tensor,
     y: &Tensor,
 ) -> Result<()> {
-    let d = ProjectionDims::new(x.shape(), w.shape())?;
-    expect_shape("projection", "bias", b, &[d.o])?;
+    let d = checked(x, w, b, y)?;
     expect_shape("projection", "alpha", alpha, &[d.o])?;
-    expect_shape("projection", "output", y, &d.output_shape())?;
     let g = d.geometry();
     if !conv::fuses_prelu(kernel, gpu, &g) {
         return Err(Error::Invalid(format!("projection_forward_prelu: this projection on {kernel:?} does not run the texture kernels, which alone apply a PReLU (see projection::fuses_prelu)")));
     }
-    conv::dispatch_forward_prelu(kernel, gpu, pass, &g, x, w, Some(b), alpha, y)
+    super::conv_fast::forward_act(gpu, pass, &g, x, w, Some(b), Some(alpha), y, conv::operands(gpu, kernel))
 }
 
 /// Whether [`forward_prelu`] runs the projection of input `x_shape` and weights `w_shape` on
