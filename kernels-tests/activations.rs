@@ -43,6 +43,44 @@ fn sigmoid_case(shape: [usize; 4]) {
     assert_close("sigmoid backward", &download(&tdx), &want, 1e-6, 1e-4);
 }
 
+/// The sigmoid of a channel range read in place (a Narrow then a Sigmoid run as one):
+/// x [2, 7, 3, 5], channels 2..6. Forward against the f64 sigmoid of the range; the gradient
+/// of x against finite differences of it, written whole (zero outside the range) over a
+/// tensor holding garbage, and added into a gradient already there (the other channels kept).
+#[test]
+fn sigmoid_of_a_channel_range() {
+    let (n, c, s, start, len) = (2usize, 7usize, 15usize, 2usize, 4usize);
+    let (xs, rs) = ([n, c, 3, 5], [n, len, 3, 5]);
+    let mut rng = Rng(5);
+    let x = f32_round(&rng.vec(n * c * s, -4.0, 4.0));
+    let r = f32_round(&rng.vec(n * len * s, -1.0, 1.0));
+    let range = |x: &[f64]| -> Vec<f64> {
+        let mut out = Vec::new();
+        for b in 0..n {
+            out.extend_from_slice(&x[(b * c + start) * s..(b * c + start + len) * s]);
+        }
+        sigmoid_ref(&out)
+    };
+    let (tx, ty, tr, tdx) = (upload(&xs, &x), zeros(&rs), upload(&rs, &r), upload(&xs, &vec![7.0; n * c * s]));
+    run(|p| {
+        sigmoid::forward_range(gpu(), p, &tx, start, &ty)?;
+        sigmoid::backward_range(gpu(), p, &ty, &tr, start, &tdx, false)
+    });
+    assert_close("sigmoid of a range", &download(&ty), &range(&x), 1e-6, 1e-5);
+    let fd = fd_grad(&x, |x| dot(&r, &range(x)));
+    assert_close("its gradient", &download(&tdx), &fd, 1e-6, 1e-4);
+    let acc = f32_round(&rng.vec(n * c * s, -1.0, 1.0));
+    let tacc = upload(&xs, &acc);
+    run(|p| sigmoid::backward_range(gpu(), p, &ty, &tr, start, &tacc, true));
+    let want: Vec<f64> = acc.iter().zip(&fd).map(|(a, g)| a + g).collect();
+    assert_close("its gradient added", &download(&tacc), &want, 1e-6, 1e-4);
+    // A range past the channels, and a gradient of the wrong shape, are errors naming them.
+    let err = gpu().run(|p| sigmoid::forward_range(gpu(), p, &tx, 4, &ty)).unwrap_err();
+    assert!(err.to_string().contains("start + len <= C"), "{err}");
+    let err = gpu().run(|p| sigmoid::backward_range(gpu(), p, &ty, &tx, start, &tdx, false)).unwrap_err();
+    assert!(err.to_string().contains("dy"), "{err}");
+}
+
 #[test]
 fn elu_forward_and_backward() {
     let n: usize = SHAPE.iter().product();

@@ -1,3 +1,4 @@
+// prepend: channel_range.wgsl
 // Concatenation along the channel axis (axis 1), one part per dispatch: the part
 // x [N, Cp, S] occupies channels c0 .. c0 + Cp of y [N, Cy, S] (S = the product of the
 // spatial axes, 1 for vectors [N, C]). Forward places a part into the whole; backward
@@ -15,10 +16,7 @@ struct Params { n: u32, cp: u32, cy: u32, s: u32, c0: u32 }
 
 // Index in the whole of element i of the part.
 fn whole(i: u32) -> u32 {
-    let s = i % p.s;
-    let c = (i / p.s) % p.cp;
-    let n = i / (p.s * p.cp);
-    return (n * p.cy + p.c0 + c) * p.s + s;
+    return range_to_whole(i, p.s, p.cp, p.cy, p.c0);
 }
 
 @compute @workgroup_size(64)
@@ -39,11 +37,8 @@ fn concat_backward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_w
 fn narrow_backward(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let i = gid.x + gid.y * nwg.x * 64u;
     if (i >= p.n * p.cy * p.s) { return; }
-    let c = (i / p.s) % p.cy;
-    let inside = c >= p.c0 && c < p.c0 + p.cp;
-    // Outside the range, j is a valid index whose value select drops.
-    let j = ((i / (p.s * p.cy)) * p.cp + select(0u, c - p.c0, inside)) * p.s + i % p.s;
-    dst[i] = select(0.0, src[j], inside);
+    let r = whole_to_range(i, p.s, p.cp, p.cy, p.c0);
+    dst[i] = select(0.0, src[r.i], r.inside);
 }
 
 @compute @workgroup_size(64)

@@ -1,3 +1,4 @@
+// prepend: channel_range.wgsl
 // Logistic sigmoid. Forward y = 1 / (1 + e^-x); backward dx = dy * y * (1 - y), computed
 // from the saved output so the input need not be kept.
 
@@ -50,4 +51,42 @@ fn sigmoid_backward_vec4(@builtin(global_invocation_id) gid: vec3<u32>, @builtin
     if (4u * i >= p.n) { return; }
     let y = by4[i];
     bdx4[i] = bdy4[i] * y * (1.0 - y);
+}
+
+// ---- a channel range of a larger tensor: a Narrow then this Sigmoid run as one (the Phong
+// heads' maps, narrowed out of the joint head's output; see `Executor::range_sigmoids`).
+// x [N, Cx, S] holds the range at channels c0 .. c0 + Cp; y and dy are the range's [N, Cp, S].
+struct RangeParams { n: u32, cp: u32, cx: u32, s: u32, c0: u32 }
+@group(0) @binding(0) var<uniform> rp: RangeParams;
+
+// Index in x of element i of the range.
+fn in_x(i: u32) -> u32 {
+    return range_to_whole(i, rp.s, rp.cp, rp.cx, rp.c0);
+}
+
+@compute @workgroup_size(64)
+fn sigmoid_forward_range(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    if (i >= rp.n * rp.cp * rp.s) { return; }
+    fy[i] = 1.0 / (1.0 + exp(-fx[in_x(i)]));
+}
+
+// The gradient of x from the range's: dy * y * (1 - y) on the range's channels, zero on the
+// others (the first gradient x gets).
+@compute @workgroup_size(64)
+fn sigmoid_backward_range(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let j = gid.x + gid.y * nwg.x * 64u;
+    if (j >= rp.n * rp.cx * rp.s) { return; }
+    let r = whole_to_range(j, rp.s, rp.cp, rp.cx, rp.c0);
+    let y = by[r.i];
+    bdx[j] = select(0.0, bdy[r.i] * y * (1.0 - y), r.inside);
+}
+
+// The same added into the range's channels of a gradient x already has (another range's).
+@compute @workgroup_size(64)
+fn sigmoid_backward_range_add(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    if (i >= rp.n * rp.cp * rp.s) { return; }
+    let y = by[i];
+    bdx[in_x(i)] += bdy[i] * y * (1.0 - y);
 }

@@ -11,6 +11,7 @@
 use super::op::Ctx;
 use super::{Graph, Kind, Value};
 use super::flat::Flat;
+use super::fuse::sigmoid_range;
 use super::profile::{OpTime, Profiler};
 use crate::error::{Error, Result};
 use crate::gpu::{BufferPool, Gpu, Memo, Tensor};
@@ -45,8 +46,8 @@ pub struct Executor {
     pub(super) values: Vec<Option<Tensor>>,
     pub(super) grads: Vec<Option<Tensor>>,
     keep: Vec<bool>,
-    grad_wanted: Vec<bool>,
-    pool: BufferPool,
+    pub(super) grad_wanted: Vec<bool>,
+    pub(super) pool: BufferPool,
     /// Dropout active (training) or identity (evaluation).
     pub training: bool,
     /// Optimizer steps taken; also seeds dropout so a resumed run repeats its masks.
@@ -81,7 +82,7 @@ pub struct Executor {
     pub notes: std::collections::HashMap<String, String>,
 }
 
-fn bytes(shape: &[usize]) -> u64 {
+pub(super) fn bytes(shape: &[usize]) -> u64 {
     shape.iter().product::<usize>() as u64 * 4
 }
 
@@ -436,11 +437,13 @@ impl Executor {
         let mut total = 0u64;
         let fused = self.prelu_fusions(gpu, nodes, last);
         let views = self.narrow_views(gpu, nodes);
+        let ranges = self.range_sigmoids(nodes, last);
         for (k, n) in nodes.iter().enumerate() {
             // Nodes that dispatch nothing (a profile shows them at about 0 ms): a PReLU the
-            // conv before it wrote, a channel range that is a view of its input.
-            let skipped = k > 0 && fused[k - 1] || views[k].is_some();
-            if let Some(offset) = views[k] {
+            // conv before it wrote, a channel range the sigmoid after it reads in place or that
+            // is a view of its input.
+            let skipped = k > 0 && fused[k - 1] || ranges[k] || views[k].is_some();
+            if let (Some(offset), false) = (views[k], ranges[k]) {
                 self.values[n.output.0] = Some(self.view_of(n, offset).map_err(|e| node_err(&n.name, e))?);
             }
             if skipped {
@@ -457,7 +460,10 @@ impl Executor {
             let shape = self.graph.values[out.0].shape.clone();
             let y = self.pool.tensor(gpu, &shape)?;
             total += bytes(&shape);
-            {
+            if let Some((h, start)) = sigmoid_range(nodes, &ranges, k) {
+                let x = self.values[h.0].as_ref().expect("kept for the range's sigmoid");
+                ops::sigmoid::forward_range(gpu, pass, x, start, &y).map_err(|e| node_err(&n.name, e))?;
+            } else {
                 let ins: Vec<&Tensor> = n.inputs.iter().map(|i| self.values[i.0].as_ref().expect("scheduled")).collect();
                 let mut ctx = Ctx { gpu, pass: &mut *pass, seed: self.node_seed(k), training: self.training };
                 let r = if fused[k] {
@@ -493,64 +499,55 @@ impl Executor {
             let pos = 2 * f - 1 - k;
             let n = &nodes[k];
             let Some(dy) = self.grads[n.output.0].clone() else { continue };
-            // Each input wanting a gradient gets its own tensor on first contribution;
-            // later contributions go to a temporary and are summed in.
-            let mut targets: Vec<Option<(Tensor, bool)>> = Vec::new(); // (tensor, accumulate)
-            let mut narrow_into = None;
-            for (j, i) in n.inputs.iter().enumerate() {
-                if !(self.grad_wanted[i.0] || produced_by_bw[i.0]) || !n.op.differentiable(j) {
-                    targets.push(None);
-                    continue;
-                }
-                let seen = self.grads[i.0].is_some() || n.inputs[..j].contains(i);
-                if let (true, super::Op::Narrow(start, _)) = (seen, &n.op) {
-                    // A channel range adds its gradient into its channels of the sum in place
-                    // rather than writing a whole-size temporary (mostly zeros) to add in.
-                    narrow_into = Some(*start);
-                    targets.push(None);
-                    continue;
-                }
-                let shape = self.graph.values[i.0].shape.clone();
-                // A parameter's gradient lives in the flat gradient buffer (see `Flat`).
-                let t = if !seen && matches!(self.graph.values[i.0].kind, Kind::Param(_)) {
-                    self.flat.grad(gpu, &self.graph, *i)?
-                } else {
-                    self.pool.tensor(gpu, &shape)?
-                };
-                if !seen {
-                    total += bytes(&shape);
-                    self.grads[i.0] = Some(t.clone());
-                }
-                targets.push(Some((t, seen)));
-            }
-            if let Some(start) = narrow_into {
-                let acc = self.grads[n.inputs[0].0].as_ref().expect("seen above");
-                ops::concat::narrow_backward_add(gpu, pass, &dy, start, acc).map_err(|e| node_err(&n.name, e))?;
-            } else if matches!(n.op, super::Op::Add) {
-                for t in targets.iter().flatten() {
-                    ops::add::copy(gpu, pass, &dy, &t.0)?;
+            // A channel range's gradient (a Narrow's, or a Sigmoid's run with the Narrow before
+            // it) goes straight into its channels of the input's gradient.
+            let range = match n.op {
+                super::Op::Narrow(start, _) => Some((n.inputs[0], start)),
+                _ => sigmoid_range(nodes, &ranges, k),
+            };
+            if let Some((h, start)) = range {
+                if self.grad_wanted[h.0] || produced_by_bw[h.0] {
+                    self.range_backward(gpu, pass, n, h, start, &dy, &mut total).map_err(|e| node_err(&n.name, e))?;
                 }
             } else {
-                // Values a rule does not declare in `saves()` may be gone already; `dy` stands
-                // in for them (rules never read them). A declared one that is missing would
-                // mean a planner bug: refuse rather than compute with the wrong buffer.
-                let (saved, out_saved) = n.op.saves();
-                let missing = saved.iter().find(|&&j| self.values[n.inputs[j].0].is_none()).map(|&j| n.inputs[j])
-                    .or((out_saved && self.values[n.output.0].is_none()).then_some(n.output));
-                if let Some(v) = missing {
-                    return Err(Error::Invalid(format!("internal: node '{}' needs '{}' for backward but it was released", n.name, self.graph.info(v).name)));
+                // Each input wanting a gradient gets its own tensor on first contribution;
+                // later contributions go to a temporary and are summed in.
+                let mut targets: Vec<Option<(Tensor, bool)>> = Vec::new(); // (tensor, accumulate)
+                for (j, i) in n.inputs.iter().enumerate() {
+                    if !(self.grad_wanted[i.0] || produced_by_bw[i.0]) || !n.op.differentiable(j) {
+                        targets.push(None);
+                        continue;
+                    }
+                    let seen = self.grads[i.0].is_some() || n.inputs[..j].contains(i);
+                    let t = if seen { self.pool.tensor(gpu, &self.graph.values[i.0].shape)? } else { self.first_grad(gpu, *i, &mut total)? };
+                    targets.push(Some((t, seen)));
                 }
-                let ins: Vec<&Tensor> = n.inputs.iter().map(|i| self.values[i.0].as_ref()).map(|t| t.unwrap_or(&dy)).collect();
-                let y = self.values[n.output.0].clone().unwrap_or_else(|| dy.clone());
-                let dx: Vec<Option<&Tensor>> = targets.iter().map(|t| t.as_ref().map(|t| &t.0)).collect();
-                let mut ctx = Ctx { gpu, pass: &mut *pass, seed: self.node_seed(k), training: self.training };
-                n.op.backward(&mut ctx, &ins, &y, &dy, &dx).map_err(|e| node_err(&n.name, e))?;
-            }
-            for (j, t) in targets.into_iter().enumerate() {
-                if let Some((t, true)) = t {
-                    let acc = self.grads[n.inputs[j].0].as_ref().expect("first contribution made it");
-                    ops::add::accumulate(gpu, pass, &t, acc)?;
-                    self.pool.release(t);
+                if matches!(n.op, super::Op::Add) {
+                    for t in targets.iter().flatten() {
+                        ops::add::copy(gpu, pass, &dy, &t.0)?;
+                    }
+                } else {
+                    // Values a rule does not declare in `saves()` may be gone already; `dy` stands
+                    // in for them (rules never read them). A declared one that is missing would
+                    // mean a planner bug: refuse rather than compute with the wrong buffer.
+                    let (saved, out_saved) = n.op.saves();
+                    let missing = saved.iter().find(|&&j| self.values[n.inputs[j].0].is_none()).map(|&j| n.inputs[j])
+                        .or((out_saved && self.values[n.output.0].is_none()).then_some(n.output));
+                    if let Some(v) = missing {
+                        return Err(Error::Invalid(format!("internal: node '{}' needs '{}' for backward but it was released", n.name, self.graph.info(v).name)));
+                    }
+                    let ins: Vec<&Tensor> = n.inputs.iter().map(|i| self.values[i.0].as_ref()).map(|t| t.unwrap_or(&dy)).collect();
+                    let y = self.values[n.output.0].clone().unwrap_or_else(|| dy.clone());
+                    let dx: Vec<Option<&Tensor>> = targets.iter().map(|t| t.as_ref().map(|t| &t.0)).collect();
+                    let mut ctx = Ctx { gpu, pass: &mut *pass, seed: self.node_seed(k), training: self.training };
+                    n.op.backward(&mut ctx, &ins, &y, &dy, &dx).map_err(|e| node_err(&n.name, e))?;
+                }
+                for (j, t) in targets.into_iter().enumerate() {
+                    if let Some((t, true)) = t {
+                        let acc = self.grads[n.inputs[j].0].as_ref().expect("first contribution made it");
+                        ops::add::accumulate(gpu, pass, &t, acc)?;
+                        self.pool.release(t);
+                    }
                 }
             }
             crate::gpu::op_done();

@@ -1,10 +1,13 @@
 //! Work the executor does not dispatch: a PReLU computed by the conv before it where nothing
-//! else reads the conv's output (see `Executor::prelu_fusions`), and channel ranges that are
-//! a range of their input's buffer (see `Executor::narrow_views`).
+//! else reads the conv's output (see `Executor::prelu_fusions`), a channel range read in place
+//! by the sigmoid after it (`Executor::range_sigmoids`), and channel ranges that are a range
+//! of their input's buffer (`Executor::narrow_views`).
 
-use super::{Executor, Node, Op};
+use super::exec::bytes;
+use super::{Executor, Kind, Node, Op, Value};
 use crate::error::Result;
 use crate::gpu::{Gpu, Tensor};
+use crate::ops;
 
 impl Executor {
     /// Which nodes also compute the PReLU after them (see `Op::fuses_prelu`): node k when
@@ -45,9 +48,56 @@ impl Executor {
             .collect()
     }
 
-    /// Extends each viewed input's last use (`last`, by schedule position) to its views' last
-    /// use, later nodes first so that a view of a view extends both.
+    /// Which nodes are a `Narrow` whose output only the `Sigmoid` right after it reads (the
+    /// Phong heads' maps; a sigmoid's backward reads its output, not its input), that nobody
+    /// asked to keep or to have the gradient of. The sigmoid then reads the range in place
+    /// (`sigmoid::forward_range`) and writes its gradient into the range's channels of the
+    /// input's (`sigmoid::backward_range`): at any batch size the range is never copied, nor
+    /// its gradient written over the whole input and added.
+    pub(super) fn range_sigmoids(&self, nodes: &[Node], last: &[usize]) -> Vec<bool> {
+        let reads = |k: usize, n: &Node| nodes.get(k + 1).is_some_and(|s| matches!(s.op, Op::Sigmoid) && s.inputs[0] == n.output);
+        let free = |v: Value| !self.persistent(v) && !self.grad_wanted[v.0];
+        nodes.iter().enumerate().map(|(k, n)| matches!(n.op, Op::Narrow(..)) && reads(k, n) && last[n.output.0] == k + 1 && free(n.output)).collect()
+    }
+
+    /// A channel range's gradient `dy` (node `n`: a `Narrow`, or a `Sigmoid` that read its range
+    /// in place) into channels `start..` of `h`'s gradient: written whole (zero outside the
+    /// range) on `h`'s first gradient, added into the range's channels after.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn range_backward(&mut self, gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, n: &Node, h: Value, start: usize, dy: &Tensor, total: &mut u64) -> Result<()> {
+        let seen = self.grads[h.0].is_some();
+        let dx = match self.grads[h.0].clone() {
+            Some(t) => t,
+            None => self.first_grad(gpu, h, total)?,
+        };
+        match (&n.op, seen) {
+            (Op::Narrow(..), false) => ops::concat::narrow_backward(gpu, pass, dy, start, &dx),
+            (Op::Narrow(..), true) => ops::concat::narrow_backward_add(gpu, pass, dy, start, &dx),
+            _ => ops::sigmoid::backward_range(gpu, pass, self.values[n.output.0].as_ref().expect("a sigmoid keeps its output"), dy, start, &dx, seen),
+        }
+    }
+
+    /// The tensor of `v`'s first gradient, which later contributions are added to: in the flat
+    /// gradient buffer for a parameter (see `Flat`), from the pool otherwise; its bytes go to
+    /// `total`.
+    pub(super) fn first_grad(&mut self, gpu: &Gpu, v: Value, total: &mut u64) -> Result<Tensor> {
+        let shape = self.graph.values[v.0].shape.clone();
+        let t = if matches!(self.graph.values[v.0].kind, Kind::Param(_)) { self.flat.grad(gpu, &self.graph, v)? } else { self.pool.tensor(gpu, &shape)? };
+        *total += bytes(&shape);
+        self.grads[v.0] = Some(t.clone());
+        Ok(t)
+    }
+
+    /// Extends the last use (`last`, by schedule position) of each input a channel range reads
+    /// in place: to its sigmoid's position, and a view's input to its views' last use (later
+    /// nodes first so that a view of a view extends both).
     pub(super) fn keep_viewed_alive(&self, gpu: &Gpu, nodes: &[Node], last: &mut [usize]) {
+        for (k, fused) in self.range_sigmoids(nodes, last).into_iter().enumerate() {
+            if fused {
+                let i = nodes[k].inputs[0].0;
+                last[i] = last[i].max(k + 1);
+            }
+        }
         for (k, v) in self.narrow_views(gpu, nodes).iter().enumerate().rev() {
             if v.is_some() {
                 let (i, o) = (nodes[k].inputs[0].0, nodes[k].output.0);
@@ -60,5 +110,14 @@ impl Executor {
     pub(super) fn view_of(&self, n: &Node, offset: u64) -> Result<Tensor> {
         let x = self.values[n.inputs[0].0].as_ref().expect("scheduled");
         Tensor::view(x.clone().into_buffer(), x.offset() + offset, &self.graph.values[n.output.0].shape)
+    }
+}
+
+/// The input and first channel of the range that node `k` reads in place: a `Sigmoid` after a
+/// `Narrow` that `ranges` (`Executor::range_sigmoids`) fused with it.
+pub(super) fn sigmoid_range(nodes: &[Node], ranges: &[bool], k: usize) -> Option<(Value, usize)> {
+    match (k.checked_sub(1).map(|j| (ranges[j], &nodes[j].op)), &nodes[k].op) {
+        (Some((true, Op::Narrow(start, _))), Op::Sigmoid) => Some((nodes[k - 1].inputs[0], *start)),
+        _ => None,
     }
 }

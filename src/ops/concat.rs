@@ -9,7 +9,7 @@ use super::expect_shape;
 use crate::error::{Result, shape_err};
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
-const SHADER: Shader = wgsl!("concat");
+const SHADER: Shader = wgsl!("concat": "channel_range", "concat");
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

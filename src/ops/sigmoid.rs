@@ -1,10 +1,11 @@
 //! Logistic sigmoid, the output heads' activation (binds `shaders/sigmoid.wgsl`).
 
-use super::elementwise;
+use super::concat::narrow_shape;
+use super::{elementwise, expect_shape};
 use crate::error::Result;
-use crate::gpu::{Arg, Gpu, Shader, Tensor, wgsl};
+use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
-const SHADER: Shader = wgsl!("sigmoid");
+const SHADER: Shader = wgsl!("sigmoid": "channel_range", "sigmoid");
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -23,4 +24,41 @@ pub fn backward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, y: &Tensor, dy: &Te
     let n = y.numel();
     let args = [Arg::R(y), Arg::R(dy), Arg::W(dx)];
     elementwise(gpu, pass, SHADER, "sigmoid_backward", &Params { n: n as u32 }, &args, n)
+}
+
+/// The uniform block of the range kernels: channels `start .. start + len` of `x_shape`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct RangeParams {
+    n: u32,
+    cp: u32,
+    cx: u32,
+    s: u32,
+    c0: u32,
+}
+
+/// The range's parameters, its shape checked against `range` (`[N, len, ...]`).
+fn range_params(op: &str, x_shape: &[usize], start: usize, range: &Tensor) -> Result<RangeParams> {
+    let len = range.shape().get(1).copied().unwrap_or(0);
+    expect_shape(op, "range", range, &narrow_shape(x_shape, start, len)?)?;
+    let s = x_shape[2..].iter().product::<usize>() as u32;
+    Ok(RangeParams { n: x_shape[0] as u32, cp: len as u32, cx: x_shape[1] as u32, s, c0: start as u32 })
+}
+
+/// `y = sigmoid(x[:, start .. start + len])` (`len` = `y`'s channels): a channel range then
+/// the sigmoid in one dispatch, with no copy of the range.
+pub fn forward_range(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, start: usize, y: &Tensor) -> Result<()> {
+    let p = range_params("sigmoid_forward_range", x.shape(), start, y)?;
+    gpu.dispatch(pass, SHADER, "sigmoid_forward_range", &p, &[Arg::R(x), Arg::W(y)], grid_1d(y.numel() as u64, 64)?)
+}
+
+/// The gradient of `x` from [`forward_range`]'s output `y` and its gradient `dy`: written over
+/// the whole of `dx` (`x`'s shape, zero outside the range), or with `add` added into its
+/// range's channels, leaving the others as they are.
+pub fn backward_range(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, y: &Tensor, dy: &Tensor, start: usize, dx: &Tensor, add: bool) -> Result<()> {
+    let op = "sigmoid_backward_range";
+    let p = range_params(op, dx.shape(), start, y)?;
+    expect_shape(op, "dy", dy, y.shape())?;
+    let (entry, n) = if add { ("sigmoid_backward_range_add", y.numel()) } else { (op, dx.numel()) };
+    gpu.dispatch(pass, SHADER, entry, &p, &[Arg::R(y), Arg::R(dy), Arg::W(dx)], grid_1d(n as u64, 64)?)
 }
