@@ -248,8 +248,9 @@ fn finite(v: f64) -> Option<f64> {
     v.is_finite().then_some(v)
 }
 
-/// Whole-network entries: a RenderNet forward at full size and a training step on the
-/// largest patch of the schedule, with the executor's dispatch, submit and memory figures.
+/// Whole-network entries: a RenderNet forward at full size and on the bunny's window, and a
+/// training step on the largest patch of the schedule at batch 1 and 2, with the executor's
+/// dispatch, submit and memory figures.
 /// Timed by wall clock around each submit and wait (the executor owns its encoder).
 fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine, profile: bool) -> Result<Vec<(String, serde_json::Value)>> {
     let p = Preset::tiny();
@@ -258,9 +259,15 @@ fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine, profile: bool) -> Result<Ve
     // The default scene's window: `render` crops the camera grid to the object (nn::render).
     let bunny = rendernet::voxel::bunny().resample_to(p.input)?;
     let crop = object_window(&bunny, &View::default(), p.cam, CROP_MARGIN);
-    let cases = [("forward", [p.cam; 2], false, ""), ("forward", [crop[2], crop[3]], false, " (bunny crop)"), ("train_step", [p.cam / 2; 2], true, "")];
-    for (pass, win, train, what) in cases {
-        let net = RenderNet::build(&p, head, 1, win, train)?;
+    // The last: the fine-tuning recipes' step (`train --crop 32 --batch 2`, weights/README.md).
+    let cases = [
+        ("forward", [p.cam; 2], false, "", 1),
+        ("forward", [crop[2], crop[3]], false, " (bunny crop)", 1),
+        ("train_step", [p.cam / 2; 2], true, "", 1),
+        ("train_step", [p.cam / 2; 2], true, "", 2),
+    ];
+    for (pass, win, train, what, batch) in cases {
+        let net = RenderNet::build(&p, head, batch, win, train)?;
         let flops = net.graph.forward_flops() * if train { 3.0 } else { 1.0 };
         let mut ex = Executor::new(gpu, net.graph.clone(), 0)?;
         let step = |ex: &mut Executor| match net.loss {
@@ -280,7 +287,7 @@ fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine, profile: bool) -> Result<Ve
         let (ms, ceiling) = (bench::median(&ms), bench::median(&ceilings));
         let gflops = flops / (ms * 1e6);
         let (ih, iw) = (p.image_for(win[0]), p.image_for(win[1]));
-        let shape = format!("{} {}^3 grid, {ih}x{iw} image{what}, batch 1", p.name, p.input);
+        let shape = format!("{} {}^3 grid, {ih}x{iw} image{what}, batch {batch}", p.name, p.input);
         let mut json = m.row("rendernet", &shape, pass, "auto", ms, gflops, ceiling);
         // Later runs may make fewer: a frozen network's weights stay packed (gpu/constant.rs).
         json["dispatches"] = again.dispatches.into();
