@@ -316,7 +316,7 @@ impl Executor {
                 last_grad[n.output.0] = last_grad[n.output.0].max(pos);
             }
         }
-        self.keep_viewed_alive(gpu, &nodes, &mut last);
+        self.keep_ranges_alive(gpu, &nodes, &mut last);
         // Free what the previous run kept for reading: it has been read or never will be.
         for v in 0..nv {
             if matches!(self.graph.values[v].kind, Kind::Node) {

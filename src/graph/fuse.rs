@@ -91,7 +91,7 @@ impl Executor {
     /// Extends the last use (`last`, by schedule position) of each input a channel range reads
     /// in place: to its sigmoid's position, and a view's input to its views' last use (later
     /// nodes first so that a view of a view extends both).
-    pub(super) fn keep_viewed_alive(&self, gpu: &Gpu, nodes: &[Node], last: &mut [usize]) {
+    pub(super) fn keep_ranges_alive(&self, gpu: &Gpu, nodes: &[Node], last: &mut [usize]) {
         for (k, fused) in self.range_sigmoids(nodes, last).into_iter().enumerate() {
             if fused {
                 let i = nodes[k].inputs[0].0;
