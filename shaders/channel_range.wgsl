@@ -2,6 +2,10 @@
 // the spatial axes). Prepended to concat.wgsl (a part of a concatenation, a narrowed range)
 // and sigmoid.wgsl (the sigmoid of a range read in place).
 
+// The uniform block of the kernels that use these helpers (`concat::Params` in Rust): n items,
+// a part or range of cp channels at channel c0 of a whole of cy, s values a channel.
+struct ChannelRange { n: u32, cp: u32, cy: u32, s: u32, c0: u32 }
+
 // Index in the whole [N, C, S] of element i of the range [N, cp, S].
 fn range_to_whole(i: u32, s: u32, cp: u32, c: u32, c0: u32) -> u32 {
     let si = i % s;

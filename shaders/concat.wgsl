@@ -9,8 +9,7 @@
 // gradient: the part's gradient on its channels, zero elsewhere; `narrow_backward_add` adds
 // a part's gradient into its channels of a gradient already written (by another part).
 
-struct Params { n: u32, cp: u32, cy: u32, s: u32, c0: u32 }
-@group(0) @binding(0) var<uniform> p: Params;
+@group(0) @binding(0) var<uniform> p: ChannelRange;
 @group(0) @binding(1) var<storage, read> src: array<f32>;
 @group(0) @binding(2) var<storage, read_write> dst: array<f32>;
 

@@ -55,13 +55,12 @@ fn sigmoid_backward_vec4(@builtin(global_invocation_id) gid: vec3<u32>, @builtin
 
 // ---- a channel range of a larger tensor: a Narrow then this Sigmoid run as one (the Phong
 // heads' maps, narrowed out of the joint head's output; see `Executor::range_sigmoids`).
-// x [N, Cx, S] holds the range at channels c0 .. c0 + Cp; y and dy are the range's [N, Cp, S].
-struct RangeParams { n: u32, cp: u32, cx: u32, s: u32, c0: u32 }
-@group(0) @binding(0) var<uniform> rp: RangeParams;
+// x [N, Cy, S] holds the range at channels c0 .. c0 + Cp; y and dy are the range's [N, Cp, S].
+@group(0) @binding(0) var<uniform> rp: ChannelRange;
 
 // Index in x of element i of the range.
 fn in_x(i: u32) -> u32 {
-    return range_to_whole(i, rp.s, rp.cp, rp.cx, rp.c0);
+    return range_to_whole(i, rp.s, rp.cp, rp.cy, rp.c0);
 }
 
 @compute @workgroup_size(64)
@@ -76,8 +75,8 @@ fn sigmoid_forward_range(@builtin(global_invocation_id) gid: vec3<u32>, @builtin
 @compute @workgroup_size(64)
 fn sigmoid_backward_range(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let j = gid.x + gid.y * nwg.x * 64u;
-    if (j >= rp.n * rp.cx * rp.s) { return; }
-    let r = whole_to_range(j, rp.s, rp.cp, rp.cx, rp.c0);
+    if (j >= rp.n * rp.cy * rp.s) { return; }
+    let r = whole_to_range(j, rp.s, rp.cp, rp.cy, rp.c0);
     let y = by[r.i];
     bdx[j] = select(0.0, bdy[r.i] * y * (1.0 - y), r.inside);
 }

@@ -11,7 +11,7 @@
 use super::op::Ctx;
 use super::{Graph, Kind, Value};
 use super::flat::Flat;
-use super::fuse::sigmoid_range;
+use super::fuse::{Fusions, sigmoid_range};
 use super::profile::{OpTime, Profiler};
 use crate::error::{Error, Result};
 use crate::gpu::{BufferPool, Gpu, Memo, Tensor};
@@ -316,7 +316,7 @@ impl Executor {
                 last_grad[n.output.0] = last_grad[n.output.0].max(pos);
             }
         }
-        self.keep_ranges_alive(gpu, &nodes, &mut last);
+        let fusions = self.fusions(gpu, &nodes, &mut last);
         // Free what the previous run kept for reading: it has been read or never will be.
         for v in 0..nv {
             if matches!(self.graph.values[v].kind, Kind::Node) {
@@ -341,9 +341,9 @@ impl Executor {
         let params = (adam.is_none()).then(|| (self.flat.params_buffer().clone(), self.param_version.get()));
         memo.begin_constants(params);
         let tensor_bytes = if self.reuse {
-            gpu.recording(&mut memo, || self.record_and_submit(gpu, &nodes, &bw, loss, adam, &last, &last_grad))
+            gpu.recording(&mut memo, || self.record_and_submit(gpu, &nodes, &bw, loss, adam, &last, &last_grad, &fusions))
         } else {
-            self.record_and_submit(gpu, &nodes, &bw, loss, adam, &last, &last_grad)
+            self.record_and_submit(gpu, &nodes, &bw, loss, adam, &last, &last_grad, &fusions)
         };
         memo.end_constants(tensor_bytes.is_ok());
         if adam.is_some() {
@@ -383,6 +383,7 @@ impl Executor {
         adam: Option<&ops::adam::Adam>,
         last: &[usize],
         last_grad: &[usize],
+        fusions: &Fusions,
     ) -> Result<u64> {
         let tensor_bytes;
         let mut enc = gpu.device.create_command_encoder(&Default::default());
@@ -391,7 +392,7 @@ impl Executor {
             if let Some(p) = &mut self.profiler {
                 p.begin(gpu, &mut pass);
             }
-            tensor_bytes = self.record(gpu, &mut pass, nodes, bw, loss, last, last_grad)?;
+            tensor_bytes = self.record(gpu, &mut pass, nodes, bw, loss, last, last_grad, fusions)?;
             if let Some(adam) = adam {
                 self.record_adam(gpu, &mut pass, adam)?;
                 if let Some(p) = &mut self.profiler {
@@ -432,18 +433,17 @@ impl Executor {
         loss: Option<Value>,
         last: &[usize],
         last_grad: &[usize],
+        fusions: &Fusions,
     ) -> Result<u64> {
         let f = nodes.len();
         let mut total = 0u64;
-        let fused = self.prelu_fusions(gpu, nodes, last);
-        let views = self.narrow_views(gpu, nodes);
-        let ranges = self.range_sigmoids(nodes, last);
+        let Fusions { prelu: fused, views, ranges } = fusions;
         for (k, n) in nodes.iter().enumerate() {
             // Nodes that dispatch nothing (a profile shows them at about 0 ms): a PReLU the
             // conv before it wrote, a channel range the sigmoid after it reads in place or that
             // is a view of its input.
             let skipped = k > 0 && fused[k - 1] || ranges[k] || views[k].is_some();
-            if let (Some(offset), false) = (views[k], ranges[k]) {
+            if let Some(offset) = views[k] {
                 self.values[n.output.0] = Some(self.view_of(n, offset).map_err(|e| node_err(&n.name, e))?);
             }
             if skipped {
@@ -460,7 +460,7 @@ impl Executor {
             let shape = self.graph.values[out.0].shape.clone();
             let y = self.pool.tensor(gpu, &shape)?;
             total += bytes(&shape);
-            if let Some((h, start)) = sigmoid_range(nodes, &ranges, k) {
+            if let Some((h, start)) = sigmoid_range(nodes, ranges, k) {
                 let x = self.values[h.0].as_ref().expect("kept for the range's sigmoid");
                 ops::sigmoid::forward_range(gpu, pass, x, start, &y).map_err(|e| node_err(&n.name, e))?;
             } else {
@@ -503,7 +503,7 @@ impl Executor {
             // it) goes straight into its channels of the input's gradient.
             let range = match n.op {
                 super::Op::Narrow(start, _) => Some((n.inputs[0], start)),
-                _ => sigmoid_range(nodes, &ranges, k),
+                _ => sigmoid_range(nodes, ranges, k),
             };
             if let Some((h, start)) = range {
                 if self.grad_wanted[h.0] || produced_by_bw[h.0] {

@@ -9,13 +9,23 @@ use crate::error::Result;
 use crate::gpu::{Gpu, Tensor};
 use crate::ops;
 
+/// What a run does not dispatch, node by node (see [`Executor::fusions`]).
+pub(super) struct Fusions {
+    /// Node k also writes the PReLU at k + 1 (`Executor::prelu_fusions`).
+    pub(super) prelu: Vec<bool>,
+    /// Node k's output is a view at this byte offset of its input (`Executor::narrow_views`).
+    pub(super) views: Vec<Option<u64>>,
+    /// Node k is a range the sigmoid at k + 1 reads in place (`Executor::range_sigmoids`).
+    pub(super) ranges: Vec<bool>,
+}
+
 impl Executor {
     /// Which nodes also compute the PReLU after them (see `Op::fuses_prelu`): node k when
     /// node k + 1 is a PReLU of its output, nothing else reads that output (`last`: the
     /// PReLU's own backward reads it, so in practice this is a forward-only run) and nobody
     /// asked to keep it. The output then never goes through memory: on lavapipe a PReLU
     /// pass cost about a tenth of the tiny forward.
-    pub(super) fn prelu_fusions(&self, gpu: &Gpu, nodes: &[Node], last: &[usize]) -> Vec<bool> {
+    fn prelu_fusions(&self, gpu: &Gpu, nodes: &[Node], last: &[usize]) -> Vec<bool> {
         let mut fused = vec![false; nodes.len()];
         for k in 0..nodes.len().saturating_sub(1) {
             let (n, next) = (&nodes[k], &nodes[k + 1]);
@@ -33,9 +43,9 @@ impl Executor {
     /// `start..` are one block), the offset meets the device's binding alignment and nobody
     /// asked to keep the output; `None` for every other node. Such an output is a view, not
     /// a copy: the Phong heads' three channel ranges cost three dispatches (3% of the tiny
-    /// forward on lavapipe) before. The input must then live as long as the view (`run`
-    /// extends its last use).
-    pub(super) fn narrow_views(&self, gpu: &Gpu, nodes: &[Node]) -> Vec<Option<u64>> {
+    /// forward on lavapipe) before. The input must then live as long as the view
+    /// ([`Executor::fusions`] extends its last use).
+    fn narrow_views(&self, gpu: &Gpu, nodes: &[Node]) -> Vec<Option<u64>> {
         let align = u64::from(gpu.limits.min_storage_buffer_offset_alignment).max(16);
         nodes
             .iter()
@@ -54,7 +64,7 @@ impl Executor {
     /// (`sigmoid::forward_range`) and writes its gradient into the range's channels of the
     /// input's (`sigmoid::backward_range`): at any batch size the range is never copied, nor
     /// its gradient written over the whole input and added.
-    pub(super) fn range_sigmoids(&self, nodes: &[Node], last: &[usize]) -> Vec<bool> {
+    fn range_sigmoids(&self, nodes: &[Node], last: &[usize]) -> Vec<bool> {
         let reads = |k: usize, n: &Node| nodes.get(k + 1).is_some_and(|s| matches!(s.op, Op::Sigmoid) && s.inputs[0] == n.output);
         let free = |v: Value| !self.persistent(v) && !self.grad_wanted[v.0];
         nodes.iter().enumerate().map(|(k, n)| matches!(n.op, Op::Narrow(..)) && reads(k, n) && last[n.output.0] == k + 1 && free(n.output)).collect()
@@ -88,22 +98,28 @@ impl Executor {
         Ok(t)
     }
 
-    /// Extends the last use (`last`, by schedule position) of each input a channel range reads
-    /// in place: to its sigmoid's position, and a view's input to its views' last use (later
+    /// What a run over `nodes` does not dispatch, decided once before recording, with the
+    /// last use (`last`, by schedule position) of each input a channel range reads in place
+    /// extended: to its sigmoid's position, and a view's input to its views' last use (later
     /// nodes first so that a view of a view extends both).
-    pub(super) fn keep_ranges_alive(&self, gpu: &Gpu, nodes: &[Node], last: &mut [usize]) {
-        for (k, fused) in self.range_sigmoids(nodes, last).into_iter().enumerate() {
+    pub(super) fn fusions(&self, gpu: &Gpu, nodes: &[Node], last: &mut [usize]) -> Fusions {
+        let prelu = self.prelu_fusions(gpu, nodes, last);
+        let ranges = self.range_sigmoids(nodes, last);
+        // A range its sigmoid reads in place is not made at all, so it needs no view either.
+        let views: Vec<Option<u64>> = self.narrow_views(gpu, nodes).into_iter().zip(&ranges).map(|(v, &r)| v.filter(|_| !r)).collect();
+        for (k, &fused) in ranges.iter().enumerate() {
             if fused {
                 let i = nodes[k].inputs[0].0;
                 last[i] = last[i].max(k + 1);
             }
         }
-        for (k, v) in self.narrow_views(gpu, nodes).iter().enumerate().rev() {
+        for (k, v) in views.iter().enumerate().rev() {
             if v.is_some() {
                 let (i, o) = (nodes[k].inputs[0].0, nodes[k].output.0);
                 last[i] = last[i].max(last[o]);
             }
         }
+        Fusions { prelu, views, ranges }
     }
 
     /// Node `n`'s output as bytes `offset..` of its input's buffer (see `narrow_views`).

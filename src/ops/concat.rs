@@ -11,9 +11,12 @@ use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
 const SHADER: Shader = wgsl!("concat": "channel_range", "concat");
 
+/// The uniform block of the channel kernels (`ChannelRange` in `shaders/channel_range.wgsl`):
+/// a part or range of `cp` channels at channel `c0` of a whole of `cy`, `n` items of `s`
+/// values a channel.
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Params {
+pub(super) struct Params {
     n: u32,
     cp: u32,
     cy: u32,
@@ -113,35 +116,32 @@ pub fn narrow_shape(x: &[usize], start: usize, len: usize) -> Result<Vec<usize>>
     Ok(out)
 }
 
-/// The channel kernels' parameters of channels `start .. start + len` of `x` (checked by the
-/// caller with [`narrow_shape`]).
-fn narrow_params(x: &[usize], start: usize, len: usize) -> Params {
-    let s = x[2..].iter().product::<usize>() as u32;
-    Params { n: x[0] as u32, cp: len as u32, cy: x[1] as u32, s, c0: start as u32 }
+/// The channel kernels' parameters of the range `range` (`[N, len, ...]`, named `what` in
+/// errors of `op`) at channels `start .. start + len` of a whole of shape `whole`, its shape
+/// checked.
+pub(super) fn range_params(op: &str, what: &str, whole: &[usize], start: usize, range: &Tensor) -> Result<Params> {
+    let len = range.shape().get(1).copied().unwrap_or(0);
+    expect_shape(op, what, range, &narrow_shape(whole, start, len)?)?;
+    let s = whole[2..].iter().product::<usize>() as u32;
+    Ok(Params { n: whole[0] as u32, cp: len as u32, cy: whole[1] as u32, s, c0: start as u32 })
 }
 
 /// `y` = channels `start ..` of `x` (as many as `y` has).
 pub fn narrow(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, start: usize, y: &Tensor) -> Result<()> {
-    let len = y.shape().get(1).copied().unwrap_or(0);
-    expect_shape("narrow", "y", y, &narrow_shape(x.shape(), start, len)?)?;
-    let p = narrow_params(x.shape(), start, len);
+    let p = range_params("narrow", "y", x.shape(), start, y)?;
     gpu.dispatch(pass, SHADER, "concat_backward", &p, &[Arg::R(x), Arg::W(y)], grid_1d(y.numel() as u64, 64)?)
 }
 
 /// The gradient of [`narrow`]: `dx` = `dy` on channels `start ..`, zero elsewhere.
 pub fn narrow_backward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, dy: &Tensor, start: usize, dx: &Tensor) -> Result<()> {
-    let len = dy.shape().get(1).copied().unwrap_or(0);
-    expect_shape("narrow", "dy", dy, &narrow_shape(dx.shape(), start, len)?)?;
-    let p = narrow_params(dx.shape(), start, len);
+    let p = range_params("narrow", "dy", dx.shape(), start, dy)?;
     gpu.dispatch(pass, SHADER, "narrow_backward", &p, &[Arg::R(dy), Arg::W(dx)], grid_1d(dx.numel() as u64, 64)?)
 }
 
 /// Adds the gradient of [`narrow`] into `dx`: `dx` += `dy` on channels `start ..`, the
 /// other channels untouched (a later channel range's gradient summed into the first's).
 pub fn narrow_backward_add(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, dy: &Tensor, start: usize, dx: &Tensor) -> Result<()> {
-    let len = dy.shape().get(1).copied().unwrap_or(0);
-    expect_shape("narrow", "dy", dy, &narrow_shape(dx.shape(), start, len)?)?;
-    let p = narrow_params(dx.shape(), start, len);
+    let p = range_params("narrow", "dy", dx.shape(), start, dy)?;
     gpu.dispatch(pass, SHADER, "narrow_backward_add", &p, &[Arg::R(dy), Arg::W(dx)], grid_1d(dy.numel() as u64, 64)?)
 }
 

@@ -1,6 +1,6 @@
 //! Logistic sigmoid, the output heads' activation (binds `shaders/sigmoid.wgsl`).
 
-use super::concat::narrow_shape;
+use super::concat::range_params;
 use super::{elementwise, expect_shape};
 use crate::error::Result;
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
@@ -26,29 +26,10 @@ pub fn backward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, y: &Tensor, dy: &Te
     elementwise(gpu, pass, SHADER, "sigmoid_backward", &Params { n: n as u32 }, &args, n)
 }
 
-/// The uniform block of the range kernels: channels `start .. start + len` of `x_shape`.
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct RangeParams {
-    n: u32,
-    cp: u32,
-    cx: u32,
-    s: u32,
-    c0: u32,
-}
-
-/// The range's parameters, its shape checked against `range` (`[N, len, ...]`).
-fn range_params(op: &str, x_shape: &[usize], start: usize, range: &Tensor) -> Result<RangeParams> {
-    let len = range.shape().get(1).copied().unwrap_or(0);
-    expect_shape(op, "range", range, &narrow_shape(x_shape, start, len)?)?;
-    let s = x_shape[2..].iter().product::<usize>() as u32;
-    Ok(RangeParams { n: x_shape[0] as u32, cp: len as u32, cx: x_shape[1] as u32, s, c0: start as u32 })
-}
-
 /// `y = sigmoid(x[:, start .. start + len])` (`len` = `y`'s channels): a channel range then
 /// the sigmoid in one dispatch, with no copy of the range.
 pub fn forward_range(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, start: usize, y: &Tensor) -> Result<()> {
-    let p = range_params("sigmoid_forward_range", x.shape(), start, y)?;
+    let p = range_params("sigmoid_forward_range", "range", x.shape(), start, y)?;
     gpu.dispatch(pass, SHADER, "sigmoid_forward_range", &p, &[Arg::R(x), Arg::W(y)], grid_1d(y.numel() as u64, 64)?)
 }
 
@@ -57,7 +38,7 @@ pub fn forward_range(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, st
 /// range's channels, leaving the others as they are.
 pub fn backward_range(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, y: &Tensor, dy: &Tensor, start: usize, dx: &Tensor, add: bool) -> Result<()> {
     let op = "sigmoid_backward_range";
-    let p = range_params(op, dx.shape(), start, y)?;
+    let p = range_params(op, "range", dx.shape(), start, y)?;
     expect_shape(op, "dy", dy, y.shape())?;
     let (entry, n) = if add { ("sigmoid_backward_range_add", y.numel()) } else { (op, dx.numel()) };
     gpu.dispatch(pass, SHADER, entry, &p, &[Arg::R(y), Arg::R(dy), Arg::W(dx)], grid_1d(n as u64, 64)?)
