@@ -481,6 +481,8 @@ fn a_forward_only_run_fuses_conv_and_prelu_with_identical_values() {
     let target = g.input("target", &[1, 16, 5, 5, 6]).unwrap();
     let loss = g.apply("loss", Op::Loss(Loss::Mse), &[total, target]).unwrap();
     // And a transposed conv 16->4 4^3 stride 2 then a PReLU, fused too: z [1, 4, 10, 10, 12].
+    let w5 = g.param("c5.weight", &[16, 16, 3, 3, 3], Init::Xavier).unwrap();
+    let b5 = g.param("c5.bias", &[16], Init::Constant(0.01)).unwrap();
     let w3 = g.param("t3.weight", &[16, 4, 4, 4, 4], Init::Xavier).unwrap();
     let b3 = g.param("t3.bias", &[4], Init::Constant(0.02)).unwrap();
     let a3 = g.param("a3.alpha", &[4], Init::Constant(0.5)).unwrap();
@@ -651,5 +653,70 @@ fn a_sigmoid_reads_its_channel_range_in_place_with_identical_values_and_gradient
         }
         let (graded, _) = run(Some(false), true);
         assert_eq!(graded, run(None, true).0, "n {n}: with the ranges' gradients asked for");
+    }
+}
+
+// A training run keeps the input packing each conv's forward makes for the same conv's weight
+// gradient (gpu/kept.rs): x [1, 1, 9, 10, 11] -> conv3d 1->8 5^3 s2 (the direct kernels' staged
+// input) -> prelu -> conv3d 8->16 3^3 (the texture packing) -> conv3d 16->16 3^3 (whose dy
+// packing has the very layout of its x packing: only the tensor tells them apart) -> a
+// transposed conv 16->4 4^3 s2 (its input packed as the backward-input kernels pack dy) ->
+// the projection -> mse. Against
+// a run that keeps nothing (`reuse_gpu_objects(false)`): gradients and a training step's
+// parameters equal to the bit, one dispatch fewer per op whose weights get a gradient, and
+// none fewer where none does (frozen parameters, inverse rendering's runs).
+#[test]
+fn a_training_run_packs_each_conv_input_once_for_forward_and_weight_gradient() {
+    use rendernet::ops::conv::{Conv, ConvKernel, Padding};
+    use rendernet::ops::conv_transpose::ConvTranspose;
+    let mut g = Graph::new();
+    let x = g.input("x", &[1, 1, 9, 10, 11]).unwrap();
+    let w1 = g.param("c1.weight", &[8, 1, 5, 5, 5], Init::Xavier).unwrap();
+    let b1 = g.param("c1.bias", &[8], Init::Constant(0.01)).unwrap();
+    let a1 = g.param("a1.alpha", &[8], Init::Constant(0.3)).unwrap();
+    let w2 = g.param("c2.weight", &[16, 8, 3, 3, 3], Init::Xavier).unwrap();
+    let b2 = g.param("c2.bias", &[16], Init::Constant(-0.01)).unwrap();
+    let w5 = g.param("c5.weight", &[16, 16, 3, 3, 3], Init::Xavier).unwrap();
+    let b5 = g.param("c5.bias", &[16], Init::Constant(0.01)).unwrap();
+    let w3 = g.param("t3.weight", &[16, 4, 4, 4, 4], Init::Xavier).unwrap();
+    let b3 = g.param("t3.bias", &[4], Init::Constant(0.02)).unwrap();
+    let w4 = g.param("p4.weight", &[6, 40, 1, 1], Init::Xavier).unwrap();
+    let b4 = g.param("p4.bias", &[6], Init::Constant(0.03)).unwrap();
+    let c1 = g.apply("c1", Op::Conv(Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same)), &[x, w1, b1]).unwrap();
+    let h = g.apply("a1", Op::Prelu, &[c1, a1]).unwrap();
+    let c2 = g.apply("c2", Op::Conv(Conv::conv3d([3, 3, 3], [1, 1, 1], Padding::Same)), &[h, w2, b2]).unwrap();
+    let c5 = g.apply("c5", Op::Conv(Conv::conv3d([3, 3, 3], [1, 1, 1], Padding::Same)), &[c2, w5, b5]).unwrap();
+    let t3 = g.apply("t3", Op::ConvTranspose(ConvTranspose::conv3d([4, 4, 4], [2, 2, 2], Padding::Same)), &[c5, w3, b3]).unwrap();
+    let p4 = g.apply("p4", Op::Projection, &[t3, w4, b4]).unwrap();
+    let target = g.input("target", &[1, 6, 10, 12]).unwrap();
+    let loss = g.apply("loss", Op::Loss(Loss::Mse), &[p4, target]).unwrap();
+    let params = [w1, b1, a1, w2, b2, w5, b5, w3, b3, w4, b4];
+    let run = |keep: bool, frozen: bool, train: bool| {
+        let mut ex = Executor::new(gpu(), g.clone(), 3).unwrap();
+        ex.feed(gpu(), x, &f32v(&Rng(8).vec(9 * 10 * 11, -1.0, 1.0))).unwrap();
+        ex.feed(gpu(), target, &f32v(&Rng(9).vec(6 * 10 * 12, -1.0, 1.0))).unwrap();
+        ex.reuse_gpu_objects(keep);
+        ex.want_grad(x);
+        if frozen {
+            ex.freeze_params();
+        }
+        let stats = if train { ex.train_step(gpu(), loss, &Adam::new(0.01)).unwrap() } else { ex.backward(gpu(), loss).unwrap() };
+        let mut got = vec![ex.grad(gpu(), x).unwrap()];
+        if !frozen {
+            got.extend(params.iter().map(|&p| ex.grad(gpu(), p).unwrap()));
+        }
+        if train {
+            got.extend(params.iter().map(|&p| ex.read(gpu(), p).unwrap()));
+        }
+        (got, stats.dispatches)
+    };
+    // Where the conv kernels run on textures (lavapipe), all five ops pack their input into a
+    // texture; elsewhere (storage buffers) nothing is kept and nothing changes.
+    let textures = Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same).fuses_prelu(ConvKernel::Auto, gpu(), &[1, 1, 9, 10, 11], &[8, 1, 5, 5, 5]).unwrap();
+    for (frozen, train) in [(false, false), (false, true), (true, false)] {
+        let ((kept, d_kept), (plain, d_plain)) = (run(true, frozen, train), run(false, frozen, train));
+        assert_eq!(kept, plain, "frozen {frozen}, train {train}: packings kept against none");
+        let fewer = if textures && !frozen { 5 } else { 0 };
+        assert_eq!(d_plain - d_kept, fewer, "frozen {frozen}, train {train}: dispatches kept {d_kept}, plain {d_plain}");
     }
 }

@@ -17,6 +17,7 @@
 //! cannot be recycled while compared).
 
 use super::constant::{Constants, Packing};
+use super::kept::KeptOperands;
 use super::pool::Reuse;
 use super::{BufferPool, Gpu, Tensor};
 use crate::error::{Error, Result};
@@ -29,7 +30,7 @@ const CHUNK_SLOTS: usize = 64;
 
 thread_local! {
     /// The memo of the recording this thread is making, if any.
-    static ACTIVE: RefCell<Option<Memo>> = const { RefCell::new(None) };
+    pub(super) static ACTIVE: RefCell<Option<Memo>> = const { RefCell::new(None) };
     /// GPU objects (buffers, textures, bind groups) this thread has created.
     static CREATED: Cell<u64> = const { Cell::new(0) };
 }
@@ -61,7 +62,7 @@ struct Bind {
 }
 
 /// Size and dimension of a scratch texture (rgba32f).
-type TexKey = ([usize; 3], wgpu::TextureDimension);
+pub(super) type TexKey = ([usize; 3], wgpu::TextureDimension);
 
 /// What the recordings of one graph keep for the next (see the module note).
 #[derive(Default)]
@@ -79,6 +80,8 @@ pub struct Memo {
     texture_bytes: u64,
     /// Weights packed once, while the parameters stay unchanged (see `constant.rs`).
     constants: Constants,
+    /// Operand packings kept from an op's forward for its backward (see `kept.rs`).
+    pub(super) kept: KeptOperands,
 }
 
 impl Memo {
@@ -157,6 +160,13 @@ impl Memo {
         }
     }
 
+    /// Hands node `node`'s kept packings (every node's with `None`) back to the texture pool.
+    pub(super) fn release_kept(&mut self, node: Option<usize>) {
+        for (k, v) in self.kept.take(node) {
+            self.textures.put(k, v);
+        }
+    }
+
     /// Hands the scratch of the op that just ended back to the pools.
     fn op_done(&mut self) {
         for t in self.live.drain(..) {
@@ -178,6 +188,8 @@ impl Gpu {
             fn drop(&mut self) {
                 let mut m = ACTIVE.with(|a| a.replace(self.1.take())).unwrap_or_default();
                 m.op_done();
+                m.release_kept(None);
+                m.kept.node = None;
                 m.data.clear();
                 *self.0 = m;
             }
@@ -208,17 +220,24 @@ impl Gpu {
     /// An rgba32f texture of `size` (width, height, depth or layers) the op being recorded
     /// writes as storage and then samples; pooled like [`Gpu::scratch`].
     pub(crate) fn scratch_texture(&self, size: [usize; 3], dim: wgpu::TextureDimension) -> wgpu::TextureView {
-        let key = (size, dim);
+        let view = self.pooled_texture(size, dim);
+        ACTIVE.with(|a| {
+            if let Some(m) = a.borrow_mut().as_mut() {
+                m.live_textures.push(((size, dim), view.clone()));
+            }
+        });
+        view
+    }
+
+    /// A texture from the active recording's pool (a fresh one outside a recording) that the
+    /// caller hands back: [`Gpu::scratch_texture`] at the op's end, a kept packing later.
+    pub(super) fn pooled_texture(&self, size: [usize; 3], dim: wgpu::TextureDimension) -> wgpu::TextureView {
         let make = || self.new_rgba32f_texture(size, dim);
         ACTIVE.with(|a| match a.borrow_mut().as_mut() {
-            Some(m) => {
-                let view = m.textures.take_or(key, || {
-                    m.texture_bytes += size.iter().product::<usize>() as u64 * 16;
-                    make()
-                });
-                m.live_textures.push((key, view.clone()));
-                view
-            }
+            Some(m) => m.textures.take_or((size, dim), || {
+                m.texture_bytes += size.iter().product::<usize>() as u64 * 16;
+                make()
+            }),
             None => make(),
         })
     }

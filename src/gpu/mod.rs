@@ -4,6 +4,7 @@
 mod calibration;
 mod constant;
 mod context;
+mod kept;
 mod kernel;
 mod memo;
 mod pool;

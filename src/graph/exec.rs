@@ -438,6 +438,22 @@ impl Executor {
         let f = nodes.len();
         let mut total = 0u64;
         let Fusions { prelu: fused, views, ranges } = fusions;
+        let produced_by_bw: Vec<bool> = {
+            let mut p = vec![false; self.graph.values.len()];
+            for (k, n) in nodes.iter().enumerate() {
+                p[n.output.0] = bw[k];
+            }
+            p
+        };
+        let wants_grad = |i: &Value| self.grad_wanted[i.0] || produced_by_bw[i.0];
+        // A node whose backward differentiates an input past its first (a conv's weights)
+        // keeps the operand textures its forward packs: the weight gradient packs the input
+        // the same way (gpu/kept.rs).
+        let keep_packs: Vec<bool> = nodes
+            .iter()
+            .enumerate()
+            .map(|(k, n)| loss.is_some() && bw[k] && n.inputs.iter().enumerate().skip(1).any(|(j, i)| wants_grad(i) && n.op.differentiable(j)))
+            .collect();
         for (k, n) in nodes.iter().enumerate() {
             // Nodes that dispatch nothing (a profile shows them at about 0 ms): a PReLU the
             // conv before it wrote, a channel range the sigmoid after it reads in place or that
@@ -465,6 +481,7 @@ impl Executor {
                 ops::sigmoid::forward_range(gpu, pass, x, start, &y).map_err(|e| node_err(&n.name, e))?;
             } else {
                 let ins: Vec<&Tensor> = n.inputs.iter().map(|i| self.values[i.0].as_ref().expect("scheduled")).collect();
+                gpu.recording_node(Some((k, keep_packs[k])));
                 let mut ctx = Ctx { gpu, pass: &mut *pass, seed: self.node_seed(k), training: self.training };
                 let r = if fused[k] {
                     let alpha = self.values[nodes[k + 1].inputs[1].0].as_ref().expect("computed before the conv");
@@ -472,6 +489,7 @@ impl Executor {
                 } else {
                     n.op.forward(&mut ctx, &ins, &y)
                 };
+                gpu.recording_node(None);
                 r.map_err(|e| node_err(&n.name, e))?;
             }
             crate::gpu::op_done();
@@ -488,13 +506,6 @@ impl Executor {
         let g = self.pool.tensor(gpu, &[1])?;
         ops::add::copy(gpu, pass, &seed, &g)?;
         self.grads[loss.0] = Some(g);
-        let produced_by_bw: Vec<bool> = {
-            let mut p = vec![false; self.graph.values.len()];
-            for (k, n) in nodes.iter().enumerate() {
-                p[n.output.0] = bw[k];
-            }
-            p
-        };
         for k in (0..f).rev().filter(|&k| bw[k]) {
             let pos = 2 * f - 1 - k;
             let n = &nodes[k];
@@ -540,7 +551,11 @@ impl Executor {
                     let y = self.values[n.output.0].clone().unwrap_or_else(|| dy.clone());
                     let dx: Vec<Option<&Tensor>> = targets.iter().map(|t| t.as_ref().map(|t| &t.0)).collect();
                     let mut ctx = Ctx { gpu, pass: &mut *pass, seed: self.node_seed(k), training: self.training };
-                    n.op.backward(&mut ctx, &ins, &y, &dy, &dx).map_err(|e| node_err(&n.name, e))?;
+                    gpu.recording_node(Some((k, false)));
+                    let r = n.op.backward(&mut ctx, &ins, &y, &dy, &dx);
+                    gpu.recording_node(None);
+                    gpu.release_kept(k);
+                    r.map_err(|e| node_err(&n.name, e))?;
                 }
                 for (j, t) in targets.into_iter().enumerate() {
                     if let Some((t, true)) = t {

@@ -72,6 +72,15 @@ fn texture(gpu: &Gpu, size: [usize; 3], dim: wgpu::TextureDimension) -> (wgpu::T
     (gpu.scratch_texture(size, dim), view)
 }
 
+/// What names an activation packing's layout for [`Gpu::operand_texture`]: its kind (`x`
+/// packed, `s` staged) and parameters. A forward and its backward that pack one tensor with
+/// the same key share the texture.
+fn packing_key(kind: u8, p: &Params) -> Vec<u8> {
+    let mut key = vec![kind];
+    key.extend_from_slice(bytemuck::bytes_of(p));
+    key
+}
+
 /// `x` packed as the texture kernels read it (see `conv_fast_pack_tex`; never folded: a fold
 /// runs the direct kernels), or as a buffer (folded by `f`).
 pub(super) fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded, x: &Tensor, cpad: usize, tex: bool) -> Result<Packed> {
@@ -80,11 +89,12 @@ pub(super) fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, 
     }
     debug_assert_eq!(f.fold(), 1, "the texture packing does not fold");
     let [id, ih, iw] = g.input;
-    let (view, dim) = texture(gpu, [iw, ih, g.n * cpad / 4 * id], wgpu::TextureDimension::D3);
-    if conv_window::pack_x(gpu, pass, g, x, cpad, &view, dim)? {
+    let p = folded_params(g, &Folded::none(*g), cpad);
+    let (view, packed) = gpu.operand_texture(x, &packing_key(b'x', &p), [iw, ih, g.n * cpad / 4 * id], wgpu::TextureDimension::D3);
+    let dim = wgpu::TextureViewDimension::D3;
+    if packed || conv_window::pack_x(gpu, pass, g, x, cpad, &view, dim)? {
         return Ok(Packed::Texture(view, dim));
     }
-    let p = folded_params(g, &Folded::none(*g), cpad);
     let args = [Arg::R(x), Arg::StorageTexture(&view, dim)];
     // Grids: (h, w) or (h, w / 4) along x, depth along y, (item, channel quad) along z.
     let zq = (g.n * cpad / 4) as u32;
@@ -98,8 +108,9 @@ pub(super) fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, 
 /// the direct kernels read (see `conv_direct.wgsl`); `p` has `g`'s sizes.
 pub(super) fn stage_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor, p: &Params) -> Result<wgpu::TextureView> {
     let [id, ih, iw] = g.input;
-    let (view, dim) = texture(gpu, [iw.div_ceil(4), ih, g.n * g.ci * id], wgpu::TextureDimension::D3);
-    if conv_window::stage_x(gpu, pass, g, x, &view, dim)? {
+    let (view, staged) = gpu.operand_texture(x, &packing_key(b's', p), [iw.div_ceil(4), ih, g.n * g.ci * id], wgpu::TextureDimension::D3);
+    let dim = wgpu::TextureViewDimension::D3;
+    if staged || conv_window::stage_x(gpu, pass, g, x, &view, dim)? {
         return Ok(view);
     }
     let entry = if iw % 4 == 0 { "conv_direct_stage_w4" } else { "conv_direct_stage" };

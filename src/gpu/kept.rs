@@ -1,0 +1,98 @@
+//! Operand packings an op's forward made, kept for its own backward in the same run. A conv's
+//! weight gradient reads its input packed exactly as its forward packed it (the same texture
+//! layout of the same tensor), so a training step that keeps the forward's texture until the
+//! backward skips one packing dispatch, and one pass over the activations, per conv (measured
+//! ~5% of a tiny training step on lavapipe, README "Benchmarks").
+//!
+//! The executor says which node it is recording and whether that node's backward will want
+//! its forward's packings ([`Gpu::recording_node`]); the packing code asks for its texture
+//! with [`Gpu::operand_texture`], naming the tensor and the packing's parameters, and skips
+//! the packing when the texture already holds it. A kept texture is a scratch texture that
+//! skips the pool until the executor releases the node ([`Gpu::release_kept`]) or the run ends.
+//! The packed tensor cannot change in between: the backward reads it, so the planner keeps
+//! it alive, and nothing writes a live value.
+
+use super::Gpu;
+use super::memo::{ACTIVE, TexKey};
+use super::Tensor;
+
+/// One kept packing: the node whose forward made it, the tensor and packing it holds.
+struct Kept {
+    node: usize,
+    source: (wgpu::Buffer, u64),
+    key: Vec<u8>,
+    tex: TexKey,
+    view: wgpu::TextureView,
+}
+
+/// The kept packings of a recording, and the node being recorded.
+#[derive(Default)]
+pub(crate) struct KeptOperands {
+    kept: Vec<Kept>,
+    /// The node being recorded, and whether its packings are kept for its backward.
+    pub(super) node: Option<(usize, bool)>,
+}
+
+impl KeptOperands {
+    /// The kept packing of `source` by `key` into a texture of kind `tex` made by the forward
+    /// of the node being recorded, if any.
+    fn find(&self, source: &(wgpu::Buffer, u64), key: &[u8], tex: TexKey) -> Option<wgpu::TextureView> {
+        let (node, _) = self.node?;
+        self.kept.iter().find(|k| k.node == node && k.source == *source && k.key == key && k.tex == tex).map(|k| k.view.clone())
+    }
+
+    /// Whether the packings of the node being recorded are kept.
+    fn keeping(&self) -> Option<usize> {
+        self.node.and_then(|(n, keep)| keep.then_some(n))
+    }
+
+    /// Takes node `node`'s kept textures (all of them with `None`), for the pool.
+    pub(crate) fn take(&mut self, node: Option<usize>) -> Vec<(TexKey, wgpu::TextureView)> {
+        let (gone, stay) = std::mem::take(&mut self.kept).into_iter().partition(|k| node.is_none_or(|n| k.node == n));
+        self.kept = stay;
+        gone.into_iter().map(|k| (k.tex, k.view)).collect::<Vec<_>>()
+    }
+}
+
+impl Gpu {
+    /// The executor: node `node`'s forward or backward is being recorded (`None`: neither),
+    /// and whether the operand textures its forward packs are kept for its backward.
+    pub(crate) fn recording_node(&self, node: Option<(usize, bool)>) {
+        ACTIVE.with(|a| {
+            if let Some(m) = a.borrow_mut().as_mut() {
+                m.kept.node = node;
+            }
+        });
+    }
+
+    /// The executor, after node `node`'s backward: its kept textures go back to the pool.
+    pub(crate) fn release_kept(&self, node: usize) {
+        ACTIVE.with(|a| {
+            if let Some(m) = a.borrow_mut().as_mut() {
+                m.release_kept(Some(node));
+            }
+        });
+    }
+
+    /// An rgba32f scratch texture of `size` to pack `source` into by the packing `key` (its
+    /// parameters, naming the layout), and whether it already holds that packing: the one
+    /// the forward of the node being recorded kept (see the module note). Outside a
+    /// recording, or for a node whose packings are not kept, a plain scratch texture.
+    pub(crate) fn operand_texture(&self, source: &Tensor, key: &[u8], size: [usize; 3], dim: wgpu::TextureDimension) -> (wgpu::TextureView, bool) {
+        let src = (source.buffer().clone(), source.offset());
+        let tex = (size, dim);
+        let found = ACTIVE.with(|a| a.borrow().as_ref().and_then(|m| m.kept.find(&src, key, tex)));
+        if let Some(view) = found {
+            return (view, true);
+        }
+        let keeper = ACTIVE.with(|a| a.borrow().as_ref().and_then(|m| m.kept.keeping()));
+        let Some(node) = keeper else { return (self.scratch_texture(size, dim), false) };
+        let view = self.pooled_texture(size, dim);
+        ACTIVE.with(|a| {
+            if let Some(m) = a.borrow_mut().as_mut() {
+                m.kept.kept.push(Kept { node, source: src, key: key.to_vec(), tex, view: view.clone() });
+            }
+        });
+        (view, false)
+    }
+}
