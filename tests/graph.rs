@@ -460,29 +460,36 @@ fn a_frozen_backward_reuses_its_packings_and_weights_that_are_inputs_never_do() 
 // prelu -> conv3d 8->16 3^3 (16-channel tile) -> prelu -> y, the second conv's output also
 // feeding `side` (so that PReLU is not fused: its input is read twice); y + side -> a
 // transposed conv -> prelu -> z -> the projection -> prelu -> q.
-#[test]
-fn a_forward_only_run_fuses_conv_and_prelu_with_identical_values() {
-    use rendernet::ops::conv::{Conv, ConvKernel, Padding};
-    use rendernet::ops::conv_transpose::ConvTranspose;
-    let mut g = Graph::new();
+/// The first two layers of the graphs below: x [1, 1, 9, 10, 11] -> conv3d 1->8 5^3 stride 2
+/// (the first layer's direct kernels) -> prelu -> conv3d 8->16 3^3 (the 16-channel tiles):
+/// x, the first conv's output and the second's, [1, 16, 5, 5, 6].
+fn two_convs(g: &mut Graph) -> (Value, Value, Value) {
+    use rendernet::ops::conv::{Conv, Padding};
     let x = g.input("x", &[1, 1, 9, 10, 11]).unwrap();
     let w1 = g.param("c1.weight", &[8, 1, 5, 5, 5], Init::Xavier).unwrap();
     let b1 = g.param("c1.bias", &[8], Init::Constant(0.01)).unwrap();
     let a1 = g.param("a1.alpha", &[8], Init::Constant(0.3)).unwrap();
     let w2 = g.param("c2.weight", &[16, 8, 3, 3, 3], Init::Xavier).unwrap();
     let b2 = g.param("c2.bias", &[16], Init::Constant(-0.01)).unwrap();
-    let a2 = g.param("a2.alpha", &[16], Init::Constant(-0.2)).unwrap();
     let c1 = g.apply("c1", Op::Conv(Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same)), &[x, w1, b1]).unwrap();
     let h = g.apply("a1", Op::Prelu, &[c1, a1]).unwrap();
     let c2 = g.apply("c2", Op::Conv(Conv::conv3d([3, 3, 3], [1, 1, 1], Padding::Same)), &[h, w2, b2]).unwrap();
+    (x, c1, c2)
+}
+
+#[test]
+fn a_forward_only_run_fuses_conv_and_prelu_with_identical_values() {
+    use rendernet::ops::conv::{Conv, ConvKernel, Padding};
+    use rendernet::ops::conv_transpose::ConvTranspose;
+    let mut g = Graph::new();
+    let (x, c1, c2) = two_convs(&mut g);
+    let a2 = g.param("a2.alpha", &[16], Init::Constant(-0.2)).unwrap();
     let y = g.apply("a2", Op::Prelu, &[c2, a2]).unwrap();
     let side = g.apply("side", Op::Sigmoid, &[c2]).unwrap();
     let total = g.apply("total", Op::Add, &[y, side]).unwrap();
     let target = g.input("target", &[1, 16, 5, 5, 6]).unwrap();
     let loss = g.apply("loss", Op::Loss(Loss::Mse), &[total, target]).unwrap();
     // And a transposed conv 16->4 4^3 stride 2 then a PReLU, fused too: z [1, 4, 10, 10, 12].
-    let w5 = g.param("c5.weight", &[16, 16, 3, 3, 3], Init::Xavier).unwrap();
-    let b5 = g.param("c5.bias", &[16], Init::Constant(0.01)).unwrap();
     let w3 = g.param("t3.weight", &[16, 4, 4, 4, 4], Init::Xavier).unwrap();
     let b3 = g.param("t3.bias", &[4], Init::Constant(0.02)).unwrap();
     let a3 = g.param("a3.alpha", &[4], Init::Constant(0.5)).unwrap();
@@ -670,27 +677,19 @@ fn a_training_run_packs_each_conv_input_once_for_forward_and_weight_gradient() {
     use rendernet::ops::conv::{Conv, ConvKernel, Padding};
     use rendernet::ops::conv_transpose::ConvTranspose;
     let mut g = Graph::new();
-    let x = g.input("x", &[1, 1, 9, 10, 11]).unwrap();
-    let w1 = g.param("c1.weight", &[8, 1, 5, 5, 5], Init::Xavier).unwrap();
-    let b1 = g.param("c1.bias", &[8], Init::Constant(0.01)).unwrap();
-    let a1 = g.param("a1.alpha", &[8], Init::Constant(0.3)).unwrap();
-    let w2 = g.param("c2.weight", &[16, 8, 3, 3, 3], Init::Xavier).unwrap();
-    let b2 = g.param("c2.bias", &[16], Init::Constant(-0.01)).unwrap();
+    let (x, _, c2) = two_convs(&mut g);
     let w5 = g.param("c5.weight", &[16, 16, 3, 3, 3], Init::Xavier).unwrap();
     let b5 = g.param("c5.bias", &[16], Init::Constant(0.01)).unwrap();
     let w3 = g.param("t3.weight", &[16, 4, 4, 4, 4], Init::Xavier).unwrap();
     let b3 = g.param("t3.bias", &[4], Init::Constant(0.02)).unwrap();
     let w4 = g.param("p4.weight", &[6, 40, 1, 1], Init::Xavier).unwrap();
     let b4 = g.param("p4.bias", &[6], Init::Constant(0.03)).unwrap();
-    let c1 = g.apply("c1", Op::Conv(Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same)), &[x, w1, b1]).unwrap();
-    let h = g.apply("a1", Op::Prelu, &[c1, a1]).unwrap();
-    let c2 = g.apply("c2", Op::Conv(Conv::conv3d([3, 3, 3], [1, 1, 1], Padding::Same)), &[h, w2, b2]).unwrap();
     let c5 = g.apply("c5", Op::Conv(Conv::conv3d([3, 3, 3], [1, 1, 1], Padding::Same)), &[c2, w5, b5]).unwrap();
     let t3 = g.apply("t3", Op::ConvTranspose(ConvTranspose::conv3d([4, 4, 4], [2, 2, 2], Padding::Same)), &[c5, w3, b3]).unwrap();
     let p4 = g.apply("p4", Op::Projection, &[t3, w4, b4]).unwrap();
     let target = g.input("target", &[1, 6, 10, 12]).unwrap();
     let loss = g.apply("loss", Op::Loss(Loss::Mse), &[p4, target]).unwrap();
-    let params = [w1, b1, a1, w2, b2, w5, b5, w3, b3, w4, b4];
+    let params = g.params();
     let run = |keep: bool, frozen: bool, train: bool| {
         let mut ex = Executor::new(gpu(), g.clone(), 3).unwrap();
         ex.feed(gpu(), x, &f32v(&Rng(8).vec(9 * 10 * 11, -1.0, 1.0))).unwrap();
