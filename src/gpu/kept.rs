@@ -1,16 +1,23 @@
-//! Operand packings an op's forward made, kept for its own backward in the same run. A conv's
-//! weight gradient reads its input packed exactly as its forward packed it (the same texture
-//! layout of the same tensor), so a training step that keeps the forward's texture until the
-//! backward skips one packing dispatch, and one pass over the activations, per conv (measured
-//! ~5% of a tiny training step on lavapipe, README "Benchmarks").
+//! Operand packings an op made, kept for its own backward in the same run. A conv's weight
+//! gradient reads its input packed exactly as its forward packed it (the same texture layout
+//! of the same tensor), so a training step that keeps the forward's texture until the
+//! backward skips one packing dispatch, and one pass over the activations, per conv (~9% of
+//! a tiny training step on lavapipe, README "Benchmarks"). Inside one backward too: a
+//! transposed conv packs its dy for its input gradient and again, the same way, as its
+//! weight gradient's input; the projection packs its dy for both gradients. And the
+//! resampling stages its grid for its forward and again for its pose gradient (the inverse
+//! renderer's runs).
 //!
-//! The executor says which node it is recording and whether that node's backward will want
-//! its forward's packings ([`Gpu::recording_node`]); the packing code asks for its texture
-//! with [`Gpu::operand_texture`], naming the tensor and the packing's parameters, and skips
-//! the packing when the texture already holds it. A kept texture is a scratch texture that
-//! skips the pool until the executor releases the node ([`Gpu::release_kept`]) or the run ends.
-//! The packed tensor cannot change in between: the backward reads it, so the planner keeps
-//! it alive, and nothing writes a live value.
+//! The executor says which node it is recording and whether what it packs is kept until the
+//! node's backward ends ([`Gpu::recording_node`]: in a forward when that backward will want
+//! it, always in the backward itself); the packing code asks for its texture with
+//! [`Gpu::operand_texture`], naming the tensor and the packing's parameters, and skips the
+//! packing when the texture already holds it. A kept texture is a scratch texture that skips
+//! the pool until the executor releases the node after its backward ([`Gpu::release_kept`])
+//! or the run ends. The packed tensor cannot change in between: every op that packs an input
+//! lists it in `Op::saves` (its backward reads it), so the planner keeps it alive until the
+//! backward, and nothing writes a live value. An op that packed an input it does not save
+//! could find a stale texture, if the input's buffer went to another tensor of that shape.
 
 use super::Gpu;
 use super::memo::{ACTIVE, TexKey};
@@ -29,13 +36,13 @@ struct Kept {
 #[derive(Default)]
 pub(crate) struct KeptOperands {
     kept: Vec<Kept>,
-    /// The node being recorded, and whether its packings are kept for its backward.
+    /// The node being recorded, and whether its packings are kept until its backward ends.
     pub(super) node: Option<(usize, bool)>,
 }
 
 impl KeptOperands {
-    /// The kept packing of `source` by `key` into a texture of kind `tex` made by the forward
-    /// of the node being recorded, if any.
+    /// The kept packing of `source` by `key` into a texture of kind `tex` made by the node
+    /// being recorded (its forward, or its backward so far), if any.
     fn find(&self, source: &(wgpu::Buffer, u64), key: &[u8], tex: TexKey) -> Option<wgpu::TextureView> {
         let (node, _) = self.node?;
         self.kept.iter().find(|k| k.node == node && k.source == *source && k.key == key && k.tex == tex).map(|k| k.view.clone())
@@ -56,7 +63,7 @@ impl KeptOperands {
 
 impl Gpu {
     /// The executor: node `node`'s forward or backward is being recorded (`None`: neither),
-    /// and whether the operand textures its forward packs are kept for its backward.
+    /// and whether the operand textures it packs are kept until its backward ends.
     pub(crate) fn recording_node(&self, node: Option<(usize, bool)>) {
         ACTIVE.with(|a| {
             if let Some(m) = a.borrow_mut().as_mut() {
@@ -76,8 +83,8 @@ impl Gpu {
 
     /// An rgba32f scratch texture of `size` to pack `source` into by the packing `key` (its
     /// parameters, naming the layout), and whether it already holds that packing: the one
-    /// the forward of the node being recorded kept (see the module note). Outside a
-    /// recording, or for a node whose packings are not kept, a plain scratch texture.
+    /// the node being recorded kept (see the module note). Outside a recording, or for a node
+    /// whose packings are not kept, a plain scratch texture.
     pub(crate) fn operand_texture(&self, source: &Tensor, key: &[u8], size: [usize; 3], dim: wgpu::TextureDimension) -> (wgpu::TextureView, bool) {
         let src = (source.buffer().clone(), source.offset());
         let tex = (size, dim);

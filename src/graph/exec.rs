@@ -551,7 +551,9 @@ impl Executor {
                     let y = self.values[n.output.0].clone().unwrap_or_else(|| dy.clone());
                     let dx: Vec<Option<&Tensor>> = targets.iter().map(|t| t.as_ref().map(|t| &t.0)).collect();
                     let mut ctx = Ctx { gpu, pass: &mut *pass, seed: self.node_seed(k), training: self.training };
-                    gpu.recording_node(Some((k, false)));
+                    // Packings the node made are found again, and what it packs now is kept
+                    // for the rest of its backward (gpu/kept.rs), then all released.
+                    gpu.recording_node(Some((k, true)));
                     let r = n.op.backward(&mut ctx, &ins, &y, &dy, &dx);
                     gpu.recording_node(None);
                     gpu.release_kept(k);
