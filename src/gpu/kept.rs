@@ -23,7 +23,7 @@ use super::Gpu;
 use super::memo::{ACTIVE, TexKey};
 use super::Tensor;
 
-/// One kept packing: the node whose forward made it, the tensor and packing it holds.
+/// One kept packing: the node that made it, the tensor and packing it holds.
 struct Kept {
     node: usize,
     source: (wgpu::Buffer, u64),

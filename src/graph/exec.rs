@@ -446,9 +446,9 @@ impl Executor {
             p
         };
         let wants_grad = |i: &Value| self.grad_wanted[i.0] || produced_by_bw[i.0];
-        // A node whose backward differentiates an input past its first (a conv's weights)
-        // keeps the operand textures its forward packs: the weight gradient packs the input
-        // the same way (gpu/kept.rs).
+        // A node whose backward differentiates an input past its first (a conv's weights, the
+        // resampling's pose) keeps the operand textures its forward packs: that gradient packs
+        // the input the same way (gpu/kept.rs).
         let keep_packs: Vec<bool> = nodes
             .iter()
             .enumerate()
