@@ -723,3 +723,43 @@ fn a_training_run_packs_each_conv_input_once_for_forward_and_weight_gradient() {
         assert_eq!(d_plain - d_kept, fewer, "frozen {frozen}, train {train}: dispatches kept {d_kept}, plain {d_plain}");
     }
 }
+
+// The resampling's pose gradient reads the grid and sampling map its forward packed (kept,
+// gpu/kept.rs) instead of staging and packing them again: grid [2, 4, 7, 8, 9] and pose
+// [2, 6] -> resample to 6 x 5 x 7 -> mse, the pose's (and the grid's) gradient asked for, as
+// the inverse renderer asks. Against a run that keeps nothing: gradients equal to the bit,
+// and the stage and pack dispatches gone where the resampling reads textures (lavapipe).
+#[test]
+fn the_pose_gradient_reads_the_grid_its_forward_packed() {
+    use rendernet::ops::conv::{Conv, ConvKernel, Padding};
+    let mut g = Graph::new();
+    let grid = g.input("grid", &[2, 4, 7, 8, 9]).unwrap();
+    let pose = g.input("pose", &[2, 6]).unwrap();
+    let target = g.input("target", &[2, 4, 6, 5, 7]).unwrap();
+    let r = g.apply("resample", Op::Resample([6, 5, 7]), &[grid, pose]).unwrap();
+    let loss = g.apply("loss", Op::Loss(Loss::Mse), &[r, target]).unwrap();
+    let run = |keep: bool, grid_too: bool| {
+        let mut ex = Executor::new(gpu(), g.clone(), 3).unwrap();
+        ex.feed(gpu(), grid, &f32v(&Rng(4).vec(2 * 4 * 7 * 8 * 9, 0.0, 1.0))).unwrap();
+        ex.feed(gpu(), pose, &f32v(&[0.9, 0.3, -0.2, 0.2, -0.1, 0.15, 1.1, -0.7, 0.4, -0.2, 0.1, 0.05])).unwrap();
+        ex.feed(gpu(), target, &f32v(&Rng(5).vec(2 * 4 * 6 * 5 * 7, 0.0, 1.0))).unwrap();
+        ex.reuse_gpu_objects(keep);
+        ex.want_grad(pose);
+        if grid_too {
+            ex.want_grad(grid);
+        }
+        let stats = ex.backward(gpu(), loss).unwrap();
+        let mut got = vec![ex.grad(gpu(), pose).unwrap()];
+        if grid_too {
+            got.push(ex.grad(gpu(), grid).unwrap());
+        }
+        (got, stats.dispatches)
+    };
+    let textures = Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same).fuses_prelu(ConvKernel::Auto, gpu(), &[1, 1, 9, 10, 11], &[8, 1, 5, 5, 5]).unwrap()
+        && rendernet::ops::resample::textures_supported(gpu());
+    for grid_too in [false, true] {
+        let ((kept, d_kept), (plain, d_plain)) = (run(true, grid_too), run(false, grid_too));
+        assert_eq!(kept, plain, "grid's gradient too: {grid_too}");
+        assert_eq!(d_plain - d_kept, if textures { 2 } else { 0 }, "grid's gradient too: {grid_too}: dispatches kept {d_kept}, plain {d_plain}");
+    }
+}

@@ -5,8 +5,8 @@
 //! a tiny training step on lavapipe, README "Benchmarks"). Inside one backward too: a
 //! transposed conv packs its dy for its input gradient and again, the same way, as its
 //! weight gradient's input; the projection packs its dy for both gradients. And the
-//! resampling stages its grid for its forward and again for its pose gradient (the inverse
-//! renderer's runs).
+//! resampling packs its grid and sampling map for its forward and again for its pose
+//! gradient (the inverse renderer's runs).
 //!
 //! The executor says which node it is recording and whether what it packs is kept until the
 //! node's backward ends ([`Gpu::recording_node`]: in a forward when that backward will want

@@ -173,13 +173,19 @@ struct Packed {
 
 impl Packed {
     /// `x` packed into scratch textures (see `resample_pack` in the shader); `params` are the
-    /// dispatch's, with `x`'s sizes.
+    /// dispatch's, with `x`'s sizes. In a run whose backward wants the pose's gradient, the
+    /// forward's packing (the grid from `x`, the sampling map from `pose`) is kept and the pose
+    /// gradient reads it instead of packing both again (`Gpu::operand_texture`, gpu/kept.rs).
     fn new(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, params: &Params, pose: &Tensor, x: &Tensor) -> Result<Packed> {
         let (n, c) = (params.n as usize, params.c as usize);
         let [d, h, w] = params.inp.map(|v| v as usize);
+        let key = |kind: u8| [&[kind][..], bytemuck::bytes_of(params)].concat();
+        let (grid, has_grid) = gpu.operand_texture(x, &key(b'g'), texture_size(n, c, [d, h, w]), wgpu::TextureDimension::D3);
+        let (map, has_map) = gpu.operand_texture(pose, &key(b'm'), [3, n, 1], wgpu::TextureDimension::D2);
+        if has_grid && has_map {
+            return Ok(Packed { grid, map });
+        }
         let stage = stage(gpu, pass, n, c, [d, h, w], x)?;
-        let grid = gpu.scratch_texture(texture_size(n, c, [d, h, w]), wgpu::TextureDimension::D3);
-        let map = gpu.scratch_texture([3, n, 1], wgpu::TextureDimension::D2);
         let args = [
             Arg::R(pose),
             Arg::ReadStorageTexture(&stage, wgpu::TextureViewDimension::D3),
