@@ -477,9 +477,16 @@ fn two_convs(g: &mut Graph) -> (Value, Value, Value) {
     (x, c1, c2)
 }
 
+/// Whether `two_convs`' first conv runs the texture kernels (lavapipe), which fuse a PReLU
+/// and pack their operands into textures; storage-buffer kernels (elsewhere) do neither.
+fn first_conv_on_textures() -> bool {
+    use rendernet::ops::conv::{Conv, ConvKernel, Padding};
+    Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same).fuses_prelu(ConvKernel::Auto, gpu(), &[1, 1, 9, 10, 11], &[8, 1, 5, 5, 5]).unwrap()
+}
+
 #[test]
 fn a_forward_only_run_fuses_conv_and_prelu_with_identical_values() {
-    use rendernet::ops::conv::{Conv, ConvKernel, Padding};
+    use rendernet::ops::conv::Padding;
     use rendernet::ops::conv_transpose::ConvTranspose;
     let mut g = Graph::new();
     let (x, c1, c2) = two_convs(&mut g);
@@ -501,7 +508,7 @@ fn a_forward_only_run_fuses_conv_and_prelu_with_identical_values() {
     let a4 = g.param("a4.alpha", &[6], Init::Constant(-0.4)).unwrap();
     let p4 = g.apply("p4", Op::Projection, &[z, w4, b4]).unwrap();
     let q = g.apply("a4", Op::Prelu, &[p4, a4]).unwrap();
-    let fuses = Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same).fuses_prelu(ConvKernel::Auto, gpu(), &[1, 1, 9, 10, 11], &[8, 1, 5, 5, 5]).unwrap();
+    let fuses = first_conv_on_textures();
     let run = |keep_c1: bool, backward: bool| {
         let mut ex = Executor::new(gpu(), g.clone(), 3).unwrap();
         ex.feed(gpu(), x, &f32v(&Rng(8).vec(9 * 10 * 11, -1.0, 1.0))).unwrap();
@@ -675,7 +682,7 @@ fn a_sigmoid_reads_its_channel_range_in_place_with_identical_values_and_gradient
 // inverse rendering's runs).
 #[test]
 fn a_training_run_packs_each_conv_input_once_for_forward_and_weight_gradient() {
-    use rendernet::ops::conv::{Conv, ConvKernel, Padding};
+    use rendernet::ops::conv::{Conv, Padding};
     use rendernet::ops::conv_transpose::ConvTranspose;
     let mut g = Graph::new();
     let (x, _, c2) = two_convs(&mut g);
@@ -715,7 +722,7 @@ fn a_training_run_packs_each_conv_input_once_for_forward_and_weight_gradient() {
     // backward: the transposed conv packs its dy for its input gradient and again as its
     // weight gradient's x, the projection for its input gradient and its weight gradient.
     // Elsewhere (storage buffers) nothing is kept and nothing changes.
-    let textures = Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same).fuses_prelu(ConvKernel::Auto, gpu(), &[1, 1, 9, 10, 11], &[8, 1, 5, 5, 5]).unwrap();
+    let textures = first_conv_on_textures();
     for (frozen, train) in [(false, false), (false, true), (true, false)] {
         let ((kept, d_kept), (plain, d_plain)) = (run(true, frozen, train), run(false, frozen, train));
         assert_eq!(kept, plain, "frozen {frozen}, train {train}: packings kept against none");
@@ -731,7 +738,6 @@ fn a_training_run_packs_each_conv_input_once_for_forward_and_weight_gradient() {
 // and the stage and pack dispatches gone where the resampling reads textures (lavapipe).
 #[test]
 fn the_pose_gradient_reads_the_grid_its_forward_packed() {
-    use rendernet::ops::conv::{Conv, ConvKernel, Padding};
     let mut g = Graph::new();
     let grid = g.input("grid", &[2, 4, 7, 8, 9]).unwrap();
     let pose = g.input("pose", &[2, 6]).unwrap();
@@ -755,7 +761,7 @@ fn the_pose_gradient_reads_the_grid_its_forward_packed() {
         }
         (got, stats.dispatches)
     };
-    let textures = Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same).fuses_prelu(ConvKernel::Auto, gpu(), &[1, 1, 9, 10, 11], &[8, 1, 5, 5, 5]).unwrap()
+    let textures = first_conv_on_textures()
         && rendernet::ops::resample::textures_supported(gpu());
     for grid_too in [false, true] {
         let ((kept, d_kept), (plain, d_plain)) = (run(true, grid_too), run(false, grid_too));

@@ -81,23 +81,23 @@ impl Gpu {
         });
     }
 
-    /// An rgba32f scratch texture of `size` to pack `source` into by the packing `key` (its
-    /// parameters, naming the layout), and whether it already holds that packing: the one
-    /// the node being recorded kept (see the module note). Outside a recording, or for a node
-    /// whose packings are not kept, a plain scratch texture.
-    pub(crate) fn operand_texture(&self, source: &Tensor, key: &[u8], size: [usize; 3], dim: wgpu::TextureDimension) -> (wgpu::TextureView, bool) {
+    /// An rgba32f scratch texture of `size` to pack `source` into, and whether it already
+    /// holds that packing: the one the node being recorded kept (see the module note). The
+    /// packing is named by `kind` (one letter per packing kernel) and `params` (its uniform
+    /// block, which fixes the layout). Outside a recording, or for a node whose packings are
+    /// not kept, a plain scratch texture.
+    pub(crate) fn operand_texture(&self, source: &Tensor, kind: u8, params: &[u8], size: [usize; 3], dim: wgpu::TextureDimension) -> (wgpu::TextureView, bool) {
         let src = (source.buffer().clone(), source.offset());
-        let tex = (size, dim);
-        let found = ACTIVE.with(|a| a.borrow().as_ref().and_then(|m| m.kept.find(&src, key, tex)));
+        let (key, tex) = ([&[kind][..], params].concat(), (size, dim));
+        let (found, keeper) = ACTIVE.with(|a| a.borrow().as_ref().map_or((None, None), |m| (m.kept.find(&src, &key, tex), m.kept.keeping())));
         if let Some(view) = found {
             return (view, true);
         }
-        let keeper = ACTIVE.with(|a| a.borrow().as_ref().and_then(|m| m.kept.keeping()));
         let Some(node) = keeper else { return (self.scratch_texture(size, dim), false) };
         let view = self.pooled_texture(size, dim);
         ACTIVE.with(|a| {
             if let Some(m) = a.borrow_mut().as_mut() {
-                m.kept.kept.push(Kept { node, source: src, key: key.to_vec(), tex, view: view.clone() });
+                m.kept.kept.push(Kept { node, source: src, key, tex, view: view.clone() });
             }
         });
         (view, false)

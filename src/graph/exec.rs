@@ -11,7 +11,7 @@
 use super::op::Ctx;
 use super::{Graph, Kind, Value};
 use super::flat::Flat;
-use super::fuse::{Fusions, sigmoid_range};
+use super::fuse::{Fusions, produced_by_backward, sigmoid_range};
 use super::profile::{OpTime, Profiler};
 use crate::error::{Error, Result};
 use crate::gpu::{BufferPool, Gpu, Memo, Tensor};
@@ -316,7 +316,7 @@ impl Executor {
                 last_grad[n.output.0] = last_grad[n.output.0].max(pos);
             }
         }
-        let fusions = self.fusions(gpu, &nodes, &mut last);
+        let fusions = self.fusions(gpu, &nodes, &bw, &mut last);
         // Free what the previous run kept for reading: it has been read or never will be.
         for v in 0..nv {
             if matches!(self.graph.values[v].kind, Kind::Node) {
@@ -437,23 +437,7 @@ impl Executor {
     ) -> Result<u64> {
         let f = nodes.len();
         let mut total = 0u64;
-        let Fusions { prelu: fused, views, ranges } = fusions;
-        let produced_by_bw: Vec<bool> = {
-            let mut p = vec![false; self.graph.values.len()];
-            for (k, n) in nodes.iter().enumerate() {
-                p[n.output.0] = bw[k];
-            }
-            p
-        };
-        let wants_grad = |i: &Value| self.grad_wanted[i.0] || produced_by_bw[i.0];
-        // A node whose backward differentiates an input past its first (a conv's weights, the
-        // resampling's pose) keeps the operand textures its forward packs: that gradient packs
-        // the input the same way (gpu/kept.rs).
-        let keep_packs: Vec<bool> = nodes
-            .iter()
-            .enumerate()
-            .map(|(k, n)| loss.is_some() && bw[k] && n.inputs.iter().enumerate().skip(1).any(|(j, i)| wants_grad(i) && n.op.differentiable(j)))
-            .collect();
+        let Fusions { prelu: fused, views, ranges, packs } = fusions;
         for (k, n) in nodes.iter().enumerate() {
             // Nodes that dispatch nothing (a profile shows them at about 0 ms): a PReLU the
             // conv before it wrote, a channel range the sigmoid after it reads in place or that
@@ -481,7 +465,7 @@ impl Executor {
                 ops::sigmoid::forward_range(gpu, pass, x, start, &y).map_err(|e| node_err(&n.name, e))?;
             } else {
                 let ins: Vec<&Tensor> = n.inputs.iter().map(|i| self.values[i.0].as_ref().expect("scheduled")).collect();
-                gpu.recording_node(Some((k, keep_packs[k])));
+                gpu.recording_node(Some((k, packs[k])));
                 let mut ctx = Ctx { gpu, pass: &mut *pass, seed: self.node_seed(k), training: self.training };
                 let r = if fused[k] {
                     let alpha = self.values[nodes[k + 1].inputs[1].0].as_ref().expect("computed before the conv");
@@ -506,6 +490,7 @@ impl Executor {
         let g = self.pool.tensor(gpu, &[1])?;
         ops::add::copy(gpu, pass, &seed, &g)?;
         self.grads[loss.0] = Some(g);
+        let produced_by_bw = produced_by_backward(nodes, bw, self.graph.values.len());
         for k in (0..f).rev().filter(|&k| bw[k]) {
             let pos = 2 * f - 1 - k;
             let n = &nodes[k];

@@ -1,7 +1,8 @@
 //! Work the executor does not dispatch: a PReLU computed by the conv before it where nothing
 //! else reads the conv's output (see `Executor::prelu_fusions`), a channel range read in place
-//! by the sigmoid after it (`Executor::range_sigmoids`), and channel ranges that are a range
-//! of their input's buffer (`Executor::narrow_views`).
+//! by the sigmoid after it (`Executor::range_sigmoids`), channel ranges that are a range of
+//! their input's buffer (`Executor::narrow_views`), and packings a backward would make again
+//! (`Executor::kept_packings`).
 
 use super::exec::bytes;
 use super::{Executor, Kind, Node, Op, Value};
@@ -17,6 +18,19 @@ pub(super) struct Fusions {
     pub(super) views: Vec<Option<u64>>,
     /// Node k is a range the sigmoid at k + 1 reads in place (`Executor::range_sigmoids`).
     pub(super) ranges: Vec<bool>,
+    /// Node k's forward keeps the operand textures it packs for its backward, which packs
+    /// them again otherwise (`Executor::kept_packings`).
+    pub(super) packs: Vec<bool>,
+}
+
+/// Which values the backward run `bw` (node by node) produces a gradient of: the outputs of
+/// the nodes it runs, among `values` values.
+pub(super) fn produced_by_backward(nodes: &[Node], bw: &[bool], values: usize) -> Vec<bool> {
+    let mut p = vec![false; values];
+    for (k, n) in nodes.iter().enumerate() {
+        p[n.output.0] = bw[k];
+    }
+    p
 }
 
 impl Executor {
@@ -98,11 +112,21 @@ impl Executor {
         Ok(t)
     }
 
-    /// What a run over `nodes` does not dispatch, decided once before recording, with the
-    /// last use (`last`, by schedule position) of each input a channel range reads in place
-    /// extended: to its sigmoid's position, and a view's input to its views' last use (later
+    /// The nodes of backward run `bw` whose backward differentiates an input past their first
+    /// (a conv's weights, the resampling's pose): that gradient packs the input as the
+    /// forward did, so the forward keeps its packings (gpu/kept.rs).
+    fn kept_packings(&self, nodes: &[Node], bw: &[bool]) -> Vec<bool> {
+        let produced = produced_by_backward(nodes, bw, self.graph.values.len());
+        let wants_grad = |i: &Value| self.grad_wanted[i.0] || produced[i.0];
+        let past_first = |n: &Node| n.inputs.iter().enumerate().skip(1).any(|(j, i)| wants_grad(i) && n.op.differentiable(j));
+        nodes.iter().zip(bw).map(|(n, &b)| b && past_first(n)).collect()
+    }
+
+    /// What a run over `nodes` (`bw`: which of them run backward) does not dispatch, decided
+    /// once before recording, with the last use (`last`, by schedule position) of each input a
+    /// channel range reads in place extended: to its sigmoid's position, and a view's input to its views' last use (later
     /// nodes first so that a view of a view extends both).
-    pub(super) fn fusions(&self, gpu: &Gpu, nodes: &[Node], last: &mut [usize]) -> Fusions {
+    pub(super) fn fusions(&self, gpu: &Gpu, nodes: &[Node], bw: &[bool], last: &mut [usize]) -> Fusions {
         let prelu = self.prelu_fusions(gpu, nodes, last);
         let ranges = self.range_sigmoids(nodes, last);
         // A range its sigmoid reads in place is not made at all, so it needs no view either.
@@ -119,7 +143,7 @@ impl Executor {
                 last[i] = last[i].max(last[o]);
             }
         }
-        Fusions { prelu, views, ranges }
+        Fusions { prelu, views, ranges, packs: self.kept_packings(nodes, bw) }
     }
 
     /// Node `n`'s output as bytes `offset..` of its input's buffer (see `narrow_views`).

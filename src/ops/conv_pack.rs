@@ -72,15 +72,6 @@ fn texture(gpu: &Gpu, size: [usize; 3], dim: wgpu::TextureDimension) -> (wgpu::T
     (gpu.scratch_texture(size, dim), view)
 }
 
-/// What names an activation packing's layout for [`Gpu::operand_texture`]: its kind (`x`
-/// packed, `s` staged) and parameters. A forward and its backward that pack one tensor with
-/// the same key share the texture.
-fn packing_key(kind: u8, p: &Params) -> Vec<u8> {
-    let mut key = vec![kind];
-    key.extend_from_slice(bytemuck::bytes_of(p));
-    key
-}
-
 /// `x` packed as the texture kernels read it (see `conv_fast_pack_tex`; never folded: a fold
 /// runs the direct kernels), or as a buffer (folded by `f`).
 pub(super) fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, f: &Folded, x: &Tensor, cpad: usize, tex: bool) -> Result<Packed> {
@@ -90,7 +81,7 @@ pub(super) fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, 
     debug_assert_eq!(f.fold(), 1, "the texture packing does not fold");
     let [id, ih, iw] = g.input;
     let p = folded_params(g, &Folded::none(*g), cpad);
-    let (view, packed) = gpu.operand_texture(x, &packing_key(b'x', &p), [iw, ih, g.n * cpad / 4 * id], wgpu::TextureDimension::D3);
+    let (view, packed) = gpu.operand_texture(x, b'x', bytemuck::bytes_of(&p), [iw, ih, g.n * cpad / 4 * id], wgpu::TextureDimension::D3);
     let dim = wgpu::TextureViewDimension::D3;
     if packed || conv_window::pack_x(gpu, pass, g, x, cpad, &view, dim)? {
         return Ok(Packed::Texture(view, dim));
@@ -108,7 +99,7 @@ pub(super) fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, 
 /// the direct kernels read (see `conv_direct.wgsl`); `p` has `g`'s sizes.
 pub(super) fn stage_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor, p: &Params) -> Result<wgpu::TextureView> {
     let [id, ih, iw] = g.input;
-    let (view, staged) = gpu.operand_texture(x, &packing_key(b's', p), [iw.div_ceil(4), ih, g.n * g.ci * id], wgpu::TextureDimension::D3);
+    let (view, staged) = gpu.operand_texture(x, b's', bytemuck::bytes_of(p), [iw.div_ceil(4), ih, g.n * g.ci * id], wgpu::TextureDimension::D3);
     let dim = wgpu::TextureViewDimension::D3;
     if staged || conv_window::stage_x(gpu, pass, g, x, &view, dim)? {
         return Ok(view);

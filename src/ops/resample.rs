@@ -179,9 +179,9 @@ impl Packed {
     fn new(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, params: &Params, pose: &Tensor, x: &Tensor) -> Result<Packed> {
         let (n, c) = (params.n as usize, params.c as usize);
         let [d, h, w] = params.inp.map(|v| v as usize);
-        let key = |kind: u8| [&[kind][..], bytemuck::bytes_of(params)].concat();
-        let (grid, has_grid) = gpu.operand_texture(x, &key(b'g'), texture_size(n, c, [d, h, w]), wgpu::TextureDimension::D3);
-        let (map, has_map) = gpu.operand_texture(pose, &key(b'm'), [3, n, 1], wgpu::TextureDimension::D2);
+        let key = bytemuck::bytes_of(params);
+        let (grid, has_grid) = gpu.operand_texture(x, b'g', key, texture_size(n, c, [d, h, w]), wgpu::TextureDimension::D3);
+        let (map, has_map) = gpu.operand_texture(pose, b'm', key, [3, n, 1], wgpu::TextureDimension::D2);
         if has_grid && has_map {
             return Ok(Packed { grid, map });
         }
