@@ -455,3 +455,30 @@ fn eval_invert_reports_every_sample_and_splits_lights_by_side() {
     assert_eq!(j["lights_in_front"].as_u64(), Some(front));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `Inverter::with_light_network`: the camera is searched through tiny, then the light is
+/// base's best at that camera (of the 5-degree polish grid), and base draws and scores the
+/// estimate. The search's own refined light is off that grid, so an ignored light network
+/// shows. A name with no shipped Phong weights is refused by the command before any work.
+#[test]
+fn a_light_network_picks_the_light_at_the_recovered_camera() {
+    use rendernet::invert::InvertOptions;
+    use rendernet::nn::render::BASE_PHONG_WEIGHTS;
+    let gpu = Gpu::new().unwrap();
+    let bunny = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/fixtures/bunny64.safetensors")).unwrap();
+    let grid = voxel::safetensors_io::from_bytes(&bunny, "bunny64").unwrap();
+    let (view, light) = (View { azimuth: 40.0, elevation: 75.0, radius: 3.6 }, Light { azimuth: 20.0, elevation: 70.0, ..Light::default() });
+    let target = reference::RayMarcher::new(&gpu).render(&gpu, &grid, &view, &light, Shader::Phong, 128).unwrap();
+    let base = || Inverter::new(Preset::base(), BASE_PHONG_WEIGHTS, "embedded base", Light::default()).unwrap();
+    let tiny = Inverter::new(Preset::tiny(), TINY_PHONG_WEIGHTS, "embedded tiny", Light::default()).unwrap();
+    let o = InvertOptions { azimuths: 4, elevations: 2, keep: 1, steps: 3, ..Default::default() };
+    let est = tiny.with_light_network(base()).unwrap().invert(&gpu, &grid, &target, &o, |_, _| {}).unwrap();
+    let (want, _) = base().light_optimum(&gpu, &grid, &target, &est.view).unwrap();
+    assert_eq!((est.light.azimuth, est.light.elevation), (want.azimuth, want.elevation));
+    assert!(est.mse.is_finite() && est.image.size == 128);
+
+    let run = |args: &[&str]| std::process::Command::new(env!("CARGO_BIN_EXE_rendernet")).args(args).output().unwrap();
+    let o = run(&["invert", "--light-network", "paper", "--steps", "1"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--light-network paper") && err.contains("shipped"), "{err}");
+}

@@ -8,7 +8,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rendernet::bench::median;
 use rendernet::data::Dataset;
 use rendernet::invert::{self, InvertOptions, Inverter, angle_between, light_direction, view_direction};
-use rendernet::nn::rendernet::Head;
+use rendernet::nn::render::shipped_weights;
+use rendernet::nn::rendernet::{Head, Preset};
 use rendernet::train::head_for;
 use rendernet::train::eval::Interval;
 use rendernet::reference::{self, Image, Light, Options, Shader};
@@ -76,6 +77,11 @@ pub struct InvertArgs {
     texture: bool,
     #[command(flatten)]
     texture_search: super::texture::TextureSearchArgs,
+    /// Shipped Phong network that picks the final light at the recovered camera (its best
+    /// light over a 5-degree grid of directions): base, whose normals are more accurate, or
+    /// none to keep the searching network's own light.
+    #[arg(long, value_name = "PRESET", default_value = "none")]
+    light_network: String,
     /// Print JSON (pose, light, MSE, errors when known, loss curve, seconds) instead of text.
     #[arg(long)]
     json: bool,
@@ -101,7 +107,7 @@ pub fn run(a: InvertArgs) -> Result<()> {
     if a.texture {
         return super::texture::invert_texture(&a.texture_search, &a.net, &gpu, &grid, &what, a.image.as_deref(), &a.scene, &a.out, &a.out_voxels(), a.json, t0);
     }
-    let inv = Inverter::new(preset, &bytes, &name, Light::default())?;
+    let inv = light_network(Inverter::new(preset, &bytes, &name, Light::default())?, &a.light_network, Light::default())?;
     let (target, truth) = match &a.image {
         Some(p) => (Image::load_rgb(p)?, None),
         None => {
@@ -135,6 +141,7 @@ pub fn run(a: InvertArgs) -> Result<()> {
             "azimuth": est.view.azimuth, "elevation": est.view.elevation, "radius": est.view.radius,
             "light_azimuth": est.light.azimuth, "light_elevation": est.light.elevation,
             "mse": est.mse, "psnr": psnr, "curve": est.curve, "seconds": secs, "out": a.out.display().to_string(),
+            "light_network": a.light_network,
         });
         if let Some((pe, le, rr)) = errors {
             j["pose_error_degrees"] = pe.into();
@@ -269,18 +276,41 @@ pub struct EvalInvertArgs {
     /// Elevation starts of the coarse search (as `invert --elevations`).
     #[arg(long, default_value_t = InvertOptions::default().elevations)]
     elevations: usize,
+    /// Shipped Phong network that picks the final light at the recovered camera (its best
+    /// light over a 5-degree grid of directions): base, whose normals are more accurate, or
+    /// none to keep the searching network's own light.
+    #[arg(long, value_name = "PRESET", default_value = "none")]
+    light_network: String,
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
 }
 
-/// The network of `net` set up to invert images of the Phong dataset `ds` (its material
-/// constants), and the weights' name.
-pub(crate) fn dataset_inverter(net: &super::weights::WeightsArgs, ds: &Dataset) -> Result<(Inverter, String)> {
+/// `inv` with the shipped Phong network `preset` picking its final light (`none`: `inv` as
+/// it is); `light` gives the material constants.
+fn light_network(inv: Inverter, preset: &str, light: Light) -> Result<Inverter> {
+    if preset == "none" {
+        return Ok(inv);
+    }
+    let p = Preset::by_name(preset).map_err(|e| Error::Invalid(format!("--light-network: {e}")))?;
+    let Some(w) = shipped_weights(&p, Shader::Phong) else {
+        return Err(Error::Invalid(format!("--light-network {preset}: no Phong weights are shipped for it (nano, tiny or base; or none)")));
+    };
+    inv.with_light_network(Inverter::new(p, w, &format!("embedded {preset}-phong weights"), light)?)
+}
+
+/// The material constants of the Phong dataset `ds`, as a default-direction light.
+fn inv_light(ds: &Dataset) -> Result<Light> {
     let Head::Phong(ph) = head_for(ds)? else {
         return Err(Error::Invalid(format!("{}: inversion needs a Phong dataset", ds.dir().display())));
     };
-    let light = Light { ambient: ph.ambient, kd: ph.kd, ks: ph.ks, shininess: ph.shininess, ..Light::default() };
+    Ok(Light { ambient: ph.ambient, kd: ph.kd, ks: ph.ks, shininess: ph.shininess, ..Light::default() })
+}
+
+/// The network of `net` set up to invert images of the Phong dataset `ds` (its material
+/// constants), and the weights' name.
+pub(crate) fn dataset_inverter(net: &super::weights::WeightsArgs, ds: &Dataset) -> Result<(Inverter, String)> {
+    let light = inv_light(ds)?;
     let Loaded { preset, bytes, name } = net.resolve(Shader::Phong, false, MANY_RENDERS)?;
     Ok((Inverter::new(preset, &bytes, &name, light)?, name))
 }
@@ -290,6 +320,7 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
     let gpu = Gpu::new()?;
     let ds = Dataset::open(&a.data)?;
     let (inv, name) = dataset_inverter(&a.net, &ds)?;
+    let inv = light_network(inv, &a.light_network, inv_light(&ds)?)?;
     let o = InvertOptions { azimuths: a.azimuths, elevations: a.elevations, keep: a.starts, steps: a.steps, ..Default::default() };
     let bar = ProgressBar::new(a.samples as u64);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} images [{elapsed_precise}<{eta_precise}]").expect("static template"));
@@ -317,10 +348,12 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
     if a.json {
         let j = serde_json::json!({
             "samples": errs.len(),
+            "light_network": a.light_network,
             "pose_error_median_degrees": median(&pose),
             "pose_error_mean_degrees": Interval::of(&pose).mean, "pose_error_ci95_degrees": Interval::of(&pose).ci95,
             "pose_within_5_degrees": within(&pose, 5.0), "pose_within_10_degrees": within(&pose, 10.0),
             "light_error_median_degrees": median(&light), "light_within_10_degrees": within(&light, 10.0),
+            "search_light_error_median_degrees": median(&errs.iter().map(|e| e.search_light_degrees).collect::<Vec<_>>()),
             "light_optimum_error_median_degrees": median(&optimum), "light_optimum_within_10_degrees": within(&optimum, 10.0),
             "light_exact_error_median_degrees": median(&exact), "light_exact_within_10_degrees": within(&exact, 10.0),
             "light_exact_truth_error_median_degrees": median(&exact_truth), "light_exact_truth_within_10_degrees": within(&exact_truth, 10.0),
@@ -331,7 +364,7 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
             "pose_off_by_10_degrees": off.len(), "pose_off_search_failures": search_failures,
             "seconds_per_image": secs.mean,
             "per_sample": errs.iter().map(|e| serde_json::json!({
-                "shape": e.shape_id, "pose_degrees": e.pose_degrees, "light_degrees": e.light_degrees,
+                "shape": e.shape_id, "pose_degrees": e.pose_degrees, "light_degrees": e.light_degrees, "search_light_degrees": e.search_light_degrees,
                 "light_optimum_degrees": e.light_optimum_degrees, "light_exact_degrees": e.light_exact_degrees, "light_exact_truth_degrees": e.light_exact_truth_degrees, "light_in_front": e.light_in_front, "radius_ratio": e.radius_ratio, "mse": e.mse,
                 "truth_mse": e.truth_mse, "search_mse": e.search_mse, "seconds": e.seconds})).collect::<Vec<_>>(),
         });
@@ -339,12 +372,16 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
         return Ok(());
     }
     let iv = Interval::of(&pose);
-    println!("{} held-out images of {}, shape known, {} on {}", errs.len(), a.data.display(), name, gpu.info.name);
+    println!("{} held-out images of {}, shape known, {} on {} (light picked by: {})", errs.len(), a.data.display(), name, gpu.info.name, a.light_network);
     println!(
         "camera direction error: median {:.1} deg, mean {:.1} ± {:.1} (95%), within 5 deg {:.0}%, within 10 deg {:.0}%",
         median(&pose), iv.mean, iv.ci95, 100.0 * within(&pose, 5.0), 100.0 * within(&pose, 10.0)
     );
     println!("light direction error: median {:.1} deg, within 10 deg {:.0}%", median(&light), 100.0 * within(&light, 10.0));
+    if a.light_network != "none" {
+        let own: Vec<f64> = errs.iter().map(|e| e.search_light_degrees).collect();
+        println!("  the searching network's own light: median {:.1} deg, within 10 deg {:.0}%", median(&own), 100.0 * within(&own, 10.0));
+    }
     println!(
         "the network's own best light at the true camera (5-degree grid): median {:.1} deg from the truth, within 10 deg {:.0}%",
         median(&optimum),

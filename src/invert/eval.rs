@@ -33,6 +33,9 @@ pub struct InvertError {
     pub pose_degrees: f64,
     /// Angle between the true and recovered light directions, degrees.
     pub light_degrees: f64,
+    /// The same for the searching network's own light (`Estimate::search_light`): equal to
+    /// `light_degrees` without a light network.
+    pub search_light_degrees: f64,
     /// Angle between the true light and the network's own best light at the true camera
     /// ([`Inverter::light_optimum`]), degrees: what no light search could improve on.
     pub light_optimum_degrees: f64,
@@ -88,7 +91,7 @@ pub fn evaluate(
         let t = std::time::Instant::now();
         let est = inv.invert(gpu, &s.grid, target, o, |_, _| {})?;
         let seconds = t.elapsed().as_secs_f64();
-        let (optimum, _) = inv.light_optimum(gpu, &s.grid, target, &s.view)?;
+        let (optimum, _) = inv.light_network().light_optimum(gpu, &s.grid, target, &s.view)?;
         let exact = inv.light_exact(gpu, &s.grid, target, &est.view)?;
         let exact_truth = inv.light_exact(gpu, &s.grid, target, &s.view)?;
         let truth_mse = inv.refined_mse(gpu, &s.grid, target, &s.view, &optimum, o)?;
@@ -98,6 +101,7 @@ pub fn evaluate(
             shape_id: s.shape_id,
             pose_degrees: angle_between(view_direction(&s.view), view_direction(&est.view)),
             light_degrees: light_off(&est.light),
+            search_light_degrees: light_off(&est.search_light),
             light_optimum_degrees: light_off(&optimum),
             light_in_front: true_light[2] > 0.0,
             light_exact_degrees: light_off(&exact),
