@@ -457,9 +457,10 @@ fn eval_invert_reports_every_sample_and_splits_lights_by_side() {
 }
 
 /// `Inverter::with_light_network`: the camera is searched through tiny, then the light is
-/// base's best at that camera (of the 5-degree polish grid), and base draws and scores the
-/// estimate. The search's own refined light is off that grid, so an ignored light network
-/// shows. A name with no shipped Phong weights is refused by the command before any work.
+/// base's best at that camera (of the 5-degree polish grid). The estimate keeps tiny's own
+/// light beside it, and here the two differ, so an ignored light network fails the first
+/// assertion. The command refuses a preset with no shipped weights and the flag with
+/// --prior when it parses its arguments.
 #[test]
 fn a_light_network_picks_the_light_at_the_recovered_camera() {
     use rendernet::invert::InvertOptions;
@@ -475,10 +476,14 @@ fn a_light_network_picks_the_light_at_the_recovered_camera() {
     let est = tiny.with_light_network(base()).unwrap().invert(&gpu, &grid, &target, &o, |_, _| {}).unwrap();
     let (want, _) = base().light_optimum(&gpu, &grid, &target, &est.view).unwrap();
     assert_eq!((est.light.azimuth, est.light.elevation), (want.azimuth, want.elevation));
+    let own = (est.search_light.azimuth, est.search_light.elevation);
+    assert_ne!(own, (want.azimuth, want.elevation), "tiny's own light is base's pick; the test would prove nothing");
     assert!(est.mse.is_finite() && est.image.size == 128);
 
     let run = |args: &[&str]| std::process::Command::new(env!("CARGO_BIN_EXE_rendernet")).args(args).output().unwrap();
-    let o = run(&["invert", "--light-network", "paper", "--steps", "1"]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("--light-network paper") && err.contains("shipped"), "{err}");
+    for (args, says) in [(&["invert", "--light-network", "paper"][..], "paper"), (&["invert", "--prior", "--light-network", "base"][..], "--prior")] {
+        let o = run(args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains("--light-network") && err.contains(says), "{args:?}: {err}");
+    }
 }

@@ -36,8 +36,10 @@ pub struct InvertError {
     /// The same for the searching network's own light (`Estimate::search_light`): equal to
     /// `light_degrees` without a light network.
     pub search_light_degrees: f64,
-    /// Angle between the true light and the network's own best light at the true camera
-    /// ([`Inverter::light_optimum`]), degrees: what no light search could improve on.
+    /// Angle between the true light and the best light at the true camera
+    /// ([`Inverter::light_optimum`]) of the network that picks the light (the light network
+    /// when there is one, else the searching network), degrees: what no light search
+    /// through it could improve on.
     pub light_optimum_degrees: f64,
     /// Whether the true light is on the camera's side of the object (its direction has a
     /// component towards the camera). A light behind lights only rims the camera sees, so
@@ -52,7 +54,7 @@ pub struct InvertError {
     /// camera error in the way.
     pub light_exact_truth_degrees: f64,
     /// Image MSE over the search window after the search's refinement started at the true
-    /// camera and the network's best grid light there ([`Inverter::refined_mse`]).
+    /// camera and the searching network's best grid light there ([`Inverter::refined_mse`]).
     pub truth_mse: f64,
     /// Image MSE over the search window at the estimate (`Estimate::curve`'s last value,
     /// scored the same way). A pose far off with `truth_mse < search_mse` is the search's
@@ -91,10 +93,14 @@ pub fn evaluate(
         let t = std::time::Instant::now();
         let est = inv.invert(gpu, &s.grid, target, o, |_, _| {})?;
         let seconds = t.elapsed().as_secs_f64();
-        let (optimum, _) = inv.light_network().light_optimum(gpu, &s.grid, target, &s.view)?;
+        // The searching network's best light at the truth starts its refinement from there
+        // (truth_mse, compared with its own search_mse); the light network's, when there is
+        // one, is the optimum its light pick could reach.
+        let (own, _) = inv.light_optimum(gpu, &s.grid, target, &s.view)?;
+        let optimum = if std::ptr::eq(inv.light_network(), inv) { own } else { inv.light_network().light_optimum(gpu, &s.grid, target, &s.view)?.0 };
         let exact = inv.light_exact(gpu, &s.grid, target, &est.view)?;
         let exact_truth = inv.light_exact(gpu, &s.grid, target, &s.view)?;
-        let truth_mse = inv.refined_mse(gpu, &s.grid, target, &s.view, &optimum, o)?;
+        let truth_mse = inv.refined_mse(gpu, &s.grid, target, &s.view, &own, o)?;
         let true_light = light_direction(&s.light);
         let light_off = |l: &Light| angle_between(true_light, light_direction(l));
         out.push(InvertError {
