@@ -8,8 +8,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rendernet::bench::median;
 use rendernet::data::Dataset;
 use rendernet::invert::{self, InvertOptions, Inverter, angle_between, light_direction, view_direction};
-use rendernet::nn::render::shipped_weights;
-use rendernet::nn::rendernet::{Head, Preset};
+use rendernet::nn::rendernet::Head;
 use rendernet::train::head_for;
 use rendernet::train::eval::Interval;
 use rendernet::reference::{self, Image, Light, Options, Shader};
@@ -111,7 +110,7 @@ pub fn run(a: InvertArgs) -> Result<()> {
     if a.texture {
         return super::texture::invert_texture(&a.texture_search, &a.net, &gpu, &grid, &what, a.image.as_deref(), &a.scene, &a.out, &a.out_voxels(), a.json, t0);
     }
-    let inv = light_network(Inverter::new(preset, &bytes, &name, Light::default())?, &a.light_network, Light::default())?;
+    let inv = light_network(Inverter::new(preset, &bytes, &name, Light::default())?, &a.light_network)?;
     let (target, truth) = match &a.image {
         Some(p) => (Image::load_rgb(p)?, None),
         None => {
@@ -293,30 +292,23 @@ pub struct EvalInvertArgs {
 }
 
 /// `inv` with the shipped Phong network `preset` picking its final light (`none`: `inv` as
-/// it is); `light` gives the material constants.
-fn light_network(inv: Inverter, preset: &str, light: Light) -> Result<Inverter> {
+/// it is), loaded as `--preset` loads embedded weights.
+fn light_network(inv: Inverter, preset: &str) -> Result<Inverter> {
     if preset == "none" {
         return Ok(inv);
     }
-    let p = Preset::by_name(preset).map_err(|e| Error::Invalid(format!("--light-network: {e}")))?;
-    let Some(w) = shipped_weights(&p, Shader::Phong) else {
-        return Err(Error::Invalid(format!("--light-network {preset}: no Phong weights are shipped for it (nano, tiny or base; or none)")));
-    };
-    inv.with_light_network(Inverter::new(p, w, &format!("embedded {preset}-phong weights"), light)?)
-}
-
-/// The material constants of the Phong dataset `ds`, as a default-direction light.
-fn inv_light(ds: &Dataset) -> Result<Light> {
-    let Head::Phong(ph) = head_for(ds)? else {
-        return Err(Error::Invalid(format!("{}: inversion needs a Phong dataset", ds.dir().display())));
-    };
-    Ok(Light { ambient: ph.ambient, kd: ph.kd, ks: ph.ks, shininess: ph.shininess, ..Light::default() })
+    let shipped = super::weights::WeightsArgs { weights: None, preset: Some(preset.to_string()), quality: None, target_psnr: None };
+    let Loaded { preset, bytes, name } = shipped.resolve(Shader::Phong, false, MANY_RENDERS)?;
+    inv.with_light_network(Inverter::new(preset, &bytes, &name, Light::default())?)
 }
 
 /// The network of `net` set up to invert images of the Phong dataset `ds` (its material
 /// constants), and the weights' name.
 pub(crate) fn dataset_inverter(net: &super::weights::WeightsArgs, ds: &Dataset) -> Result<(Inverter, String)> {
-    let light = inv_light(ds)?;
+    let Head::Phong(ph) = head_for(ds)? else {
+        return Err(Error::Invalid(format!("{}: inversion needs a Phong dataset", ds.dir().display())));
+    };
+    let light = Light { ambient: ph.ambient, kd: ph.kd, ks: ph.ks, shininess: ph.shininess, ..Light::default() };
     let Loaded { preset, bytes, name } = net.resolve(Shader::Phong, false, MANY_RENDERS)?;
     Ok((Inverter::new(preset, &bytes, &name, light)?, name))
 }
@@ -326,7 +318,7 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
     let gpu = Gpu::new()?;
     let ds = Dataset::open(&a.data)?;
     let (inv, name) = dataset_inverter(&a.net, &ds)?;
-    let inv = light_network(inv, &a.light_network, inv_light(&ds)?)?;
+    let inv = light_network(inv, &a.light_network)?;
     let o = InvertOptions { azimuths: a.azimuths, elevations: a.elevations, keep: a.starts, steps: a.steps, ..Default::default() };
     let bar = ProgressBar::new(a.samples as u64);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} images [{elapsed_precise}<{eta_precise}]").expect("static template"));

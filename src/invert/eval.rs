@@ -97,7 +97,10 @@ pub fn evaluate(
         // (truth_mse, compared with its own search_mse); the light network's, when there is
         // one, is the optimum its light pick could reach.
         let (own, _) = inv.light_optimum(gpu, &s.grid, target, &s.view)?;
-        let optimum = if std::ptr::eq(inv.light_network(), inv) { own } else { inv.light_network().light_optimum(gpu, &s.grid, target, &s.view)?.0 };
+        let optimum = match &inv.light_by {
+            None => own,
+            Some(by) => by.light_optimum(gpu, &s.grid, target, &s.view)?.0,
+        };
         let exact = inv.light_exact(gpu, &s.grid, target, &est.view)?;
         let exact_truth = inv.light_exact(gpu, &s.grid, target, &s.view)?;
         let truth_mse = inv.refined_mse(gpu, &s.grid, target, &s.view, &own, o)?;

@@ -139,14 +139,15 @@ impl Inverter {
     /// ([`Inverter::light_optimum`]), and `other` draws and scores the estimate. Base picking
     /// after tiny's search measured closer to the true light on procedural chairs, not on
     /// real meshes (README "Inverse rendering"). `other` must render images of this one's
-    /// size.
-    pub fn with_light_network(mut self, other: Inverter) -> Result<Inverter> {
+    /// size; it shades with this one's material constants (the image's).
+    pub fn with_light_network(mut self, mut other: Inverter) -> Result<Inverter> {
         if other.size != self.size {
             return Err(Error::Invalid(format!(
                 "light network {}: renders {} px images, the inverter {} px ({})",
                 other.name, other.size, self.size, self.name
             )));
         }
+        other.head_light = self.head_light;
         self.light_by = Some(Box::new(other));
         Ok(self)
     }
@@ -331,9 +332,10 @@ impl Inverter {
         // The estimate's picture and score: the whole frame, once, by the network that
         // chose the light.
         let by = self.light_network();
+        let gv = if self.light_by.is_some() { by.grid_values(grid)? } else { gv };
         let full = Window::full(&by.preset, by.size);
         let (net, mut ex, _) = by.executor(gpu, 1, false, &full)?;
-        by.feed(gpu, &net, &ex, &by.grid_values(grid)?, &[best], &full)?;
+        by.feed(gpu, &net, &ex, &gv, &[best], &full)?;
         ex.forward(gpu)?;
         let img: Vec<f32> = ex.read(gpu, net.image)?.into_iter().map(|x| x.clamp(0.0, 1.0)).collect();
         let mse = img.iter().zip(&target.data).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / img.len() as f64;
