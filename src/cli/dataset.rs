@@ -9,8 +9,8 @@ use std::path::PathBuf;
 /// Flags of `rendernet dataset`.
 #[derive(Args, Debug)]
 pub struct DatasetArgs {
-    /// Shape source: chairs (procedural), real (meshes under --real-dir) or mixed (every
-    /// procedural family in turn).
+    /// Shape source: chairs (procedural), real (meshes under --real-dir), mixed (chair,
+    /// table, sofa, primitive in turn) or varied (mixed's four and creature in turn).
     #[arg(long, default_value = "chairs", value_parser = parse_shapes)]
     shapes: Shapes,
     /// Target shader: phong (stores phong, normal, albedo, mask), albedo, normal, depth, mask,
@@ -78,7 +78,7 @@ fn parse_radius(s: &str) -> std::result::Result<(f64, f64), String> {
 }
 
 fn parse_shapes(s: &str) -> std::result::Result<Shapes, String> {
-    Shapes::parse(s).ok_or_else(|| format!("unknown shapes '{s}'; expected chairs, real or mixed"))
+    Shapes::parse(s).ok_or_else(|| format!("unknown shapes '{s}'; expected chairs, real, mixed or varied"))
 }
 
 /// Generates the dataset and reports counts and timing.

@@ -20,7 +20,7 @@ pub struct SceneArgs {
     /// Grid side used to voxelise a mesh or a procedural --shape.
     #[arg(long, default_value_t = 64, allow_negative_numbers = true)]
     pub resolution: usize,
-    /// Procedural shape family instead of a file: chair, table, sofa or primitive.
+    /// Procedural shape family instead of a file: chair, table, sofa, primitive or creature.
     #[arg(long, value_parser = parse_family)]
     shape: Option<Family>,
     /// Seed of the procedural shape.
@@ -145,7 +145,8 @@ fn parse_family(s: &str) -> std::result::Result<Family, String> {
         "table" => Ok(Family::Table),
         "sofa" => Ok(Family::Sofa),
         "primitive" => Ok(Family::Primitive),
-        _ => Err(format!("unknown shape '{s}'; expected chair, table, sofa or primitive")),
+        "creature" => Ok(Family::Creature),
+        _ => Err(format!("unknown shape '{s}'; expected chair, table, sofa, primitive or creature")),
     }
 }
 

@@ -38,15 +38,19 @@ pub enum Shapes {
     Real,
     /// Every procedural family in turn: chair, table, sofa, primitive, chair, ...
     Mixed,
+    /// The four of `Mixed` and the curved creatures in turn: chair, table, sofa, primitive,
+    /// creature, chair, ...
+    Varied,
 }
 
 impl Shapes {
-    /// Parses `chairs`, `real` or `mixed`.
+    /// Parses `chairs`, `real`, `mixed` or `varied`.
     pub fn parse(s: &str) -> Option<Shapes> {
         match s {
             "chairs" => Some(Shapes::Chairs),
             "real" => Some(Shapes::Real),
             "mixed" => Some(Shapes::Mixed),
+            "varied" => Some(Shapes::Varied),
             _ => None,
         }
     }
@@ -57,6 +61,7 @@ impl Shapes {
             Shapes::Chairs => "chairs",
             Shapes::Real => "real",
             Shapes::Mixed => "mixed",
+            Shapes::Varied => "varied",
         }
     }
 }
@@ -176,16 +181,25 @@ fn verr(e: crate::voxel::VoxelError) -> Error {
     Error::Invalid(e.to_string())
 }
 
+/// The procedural family of shape `i` (`None` for real meshes).
+fn family_of(shapes: Shapes, i: usize) -> Option<Family> {
+    match shapes {
+        Shapes::Chairs => Some(Family::Chair),
+        Shapes::Mixed => Some(Family::ALL[i % Family::ALL.len()]),
+        Shapes::Varied => Some(Family::VARIED[i % Family::VARIED.len()]),
+        Shapes::Real => None,
+    }
+}
+
 /// The input grid (`res`) and the truth grid (`truth_res`) of shape `i`.
 fn shape_grids(
     o: &GenerateOptions,
     meshes: &[PathBuf],
     i: usize,
 ) -> Result<(VoxelGrid, VoxelGrid)> {
-    let family = match o.shapes {
-        Shapes::Chairs => Family::Chair,
-        Shapes::Mixed => Family::ALL[i % Family::ALL.len()],
-        Shapes::Real => {
+    let family = match family_of(o.shapes, i) {
+        Some(f) => f,
+        None => {
             // The input stays binary like the procedural inputs (`Shape::to_grid`); the truth
             // grid is anti-aliased so the targets show the mesh, not voxel stair-steps.
             let mut mesh = Mesh::load(&meshes[i]).map_err(verr)?;
@@ -503,4 +517,23 @@ pub fn generate(gpu: &Gpu, o: &GenerateOptions, dir: &Path, mut progress: impl F
         manifest,
         seconds: t0.elapsed().as_secs_f64(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `varied` is `mixed` with a creature after every four; every name parses back.
+    #[test]
+    fn varied_cycles_mixed_then_a_creature() {
+        for i in 0..10 {
+            let want = if i % 5 == 4 { Family::Creature } else { Family::ALL[i % 5] };
+            assert_eq!(family_of(Shapes::Varied, i), Some(want), "shape {i}");
+            assert_eq!(family_of(Shapes::Mixed, i), Some(Family::ALL[i % 4]), "shape {i}");
+        }
+        assert_eq!(family_of(Shapes::Real, 3), None);
+        for s in [Shapes::Chairs, Shapes::Real, Shapes::Mixed, Shapes::Varied] {
+            assert_eq!(Shapes::parse(s.name()), Some(s));
+        }
+    }
 }

@@ -1,4 +1,4 @@
-//! Procedural shapes: chairs, tables, sofas and CSG primitives built from analytic solids,
+//! Procedural shapes: chairs, tables, sofas, CSG primitives and creatures built from analytic solids,
 //! deterministic from a `u64` seed. They stand in for ShapeNet, which is not reachable here.
 //!
 //! A [`Shape`] is an ordered list of solids, each added (union) or carved (difference) in turn.
@@ -7,9 +7,11 @@
 //! (`voxel = (p + 1) * n / 2`, axes as in [`super`]) and [`Shape::to_mesh`] returns triangles in
 //! the same frame, so a mesh renderer and the voxel grid line up without further transforms.
 
+mod creature;
 mod families;
 mod paint;
 
+pub use creature::creature;
 pub use families::{chair, primitive, sofa, table};
 pub use paint::{Paint, Pattern, TEXTURE_CODE};
 
@@ -39,6 +41,15 @@ pub enum Solid {
         ra: f32,
         /// Radius at `b`.
         rb: f32,
+    },
+    /// Ellipsoid: `rot` maps local axes to world; `radii` are the semi-axes along them.
+    Ellipsoid {
+        /// Centre.
+        center: Vec3,
+        /// Semi-axes along the local axes.
+        radii: Vec3,
+        /// Local-to-world rotation.
+        rot: Mat3,
     },
     /// Ball.
     Sphere {
@@ -75,6 +86,9 @@ impl Solid {
                 };
                 (0.0..=1.0).contains(&t) && (p - a - axis * t).length() <= ra + (rb - ra) * t
             }
+            Solid::Ellipsoid { center, radii, rot } => {
+                ((rot.transpose() * (p - center)) / radii).length_squared() <= 1.0
+            }
             Solid::Sphere { center, radius } => p.distance_squared(center) <= radius * radius,
         }
     }
@@ -96,6 +110,12 @@ impl Solid {
                     (a + ext * ra).max(b + ext * rb),
                 )
             }
+            Solid::Ellipsoid { center, radii, rot } => {
+                // Along world axis i: sqrt(sum_j (rot_ij radii_j)^2).
+                let m = rot * Mat3::from_diagonal(radii);
+                let e = Vec3::new(m.row(0).length(), m.row(1).length(), m.row(2).length());
+                (center - e, center + e)
+            }
             Solid::Sphere { center, radius } => {
                 (center - Vec3::splat(radius), center + Vec3::splat(radius))
             }
@@ -116,6 +136,11 @@ impl Solid {
                 ra: ra * s,
                 rb: rb * s,
             },
+            Solid::Ellipsoid { center, radii, rot } => Solid::Ellipsoid {
+                center: center * s + t,
+                radii: radii * s,
+                rot,
+            },
             Solid::Sphere { center, radius } => Solid::Sphere {
                 center: center * s + t,
                 radius: radius * s,
@@ -128,6 +153,13 @@ impl Solid {
         match *self {
             Solid::Cuboid { center, half, rot } => Mesh::cuboid(center, half, rot),
             Solid::Frustum { a, b, ra, rb } => Mesh::frustum(a, b, ra, rb, 16),
+            Solid::Ellipsoid { center, radii, rot } => {
+                let mut m = Mesh::uv_sphere(Vec3::ZERO, 1.0, 24, 12);
+                for p in &mut m.positions {
+                    *p = (center + rot * (Vec3::from(*p) * radii)).to_array();
+                }
+                m
+            }
             Solid::Sphere { center, radius } => Mesh::uv_sphere(center, radius, 24, 12),
         }
     }
@@ -154,15 +186,29 @@ pub enum Family {
     Sofa,
     /// Unions and differences of boxes, spheres and cylinders.
     Primitive,
+    /// Curved, animal-like bodies: an ellipsoid body with legs, neck, head and tail, or a
+    /// cluster of ellipsoids (a rock, a head, a crouching animal).
+    Creature,
 }
 
 impl Family {
-    /// All families, in a fixed order.
+    /// The four families of `dataset --shapes mixed`, in its order (furniture and CSG
+    /// primitives: every surface flat, cylindrical or spherical).
     pub const ALL: [Family; 4] = [
         Family::Chair,
         Family::Table,
         Family::Sofa,
         Family::Primitive,
+    ];
+
+    /// Every family, in the order of `dataset --shapes varied`: [`Family::ALL`], then
+    /// [`Family::Creature`].
+    pub const VARIED: [Family; 5] = [
+        Family::Chair,
+        Family::Table,
+        Family::Sofa,
+        Family::Primitive,
+        Family::Creature,
     ];
 
     /// The shape of this family for `seed`.
@@ -172,6 +218,7 @@ impl Family {
             Family::Table => table(seed),
             Family::Sofa => sofa(seed),
             Family::Primitive => primitive(seed),
+            Family::Creature => creature(seed),
         }
     }
 }
