@@ -65,8 +65,8 @@ pub fn colour_inverter(net: &super::weights::WeightsArgs) -> Result<(Inverter, S
 /// Flags of `rendernet eval-texture`.
 #[derive(Args, Debug)]
 pub struct EvalTextureArgs {
-    /// Painted shapes (the procedural families in turn, each with a paint the decoder never
-    /// trained on).
+    /// Painted shapes (the four families of `dataset --shapes mixed` in turn, each with a
+    /// paint the decoder never trained on).
     #[arg(long, default_value_t = 16)]
     samples: usize,
     /// Images of each shape the texture is recovered from (random cameras and lights, known).

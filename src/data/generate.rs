@@ -36,7 +36,8 @@ pub enum Shapes {
     Chairs,
     /// Meshes (.obj, .off, .ply) under a directory, in file-name order (see `datasets/`).
     Real,
-    /// Every procedural family in turn: chair, table, sofa, primitive, chair, ...
+    /// The four furniture and CSG families in turn ([`Family::ALL`]): chair, table, sofa,
+    /// primitive, chair, ...
     Mixed,
     /// The four of `Mixed` and the curved creatures in turn: chair, table, sofa, primitive,
     /// creature, chair, ...

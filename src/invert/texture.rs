@@ -133,10 +133,11 @@ fn same_pattern(a: &Paint, b: &Paint) -> bool {
     }
 }
 
-/// Recovers the paints of `samples` procedural shapes (the families in turn, seeds no dataset
-/// draws) painted with the texture decoder's held-out paints (never seen in its training),
-/// each from `views` reference images at random cameras (radius 3.3-4.5) and lights, both
-/// known; scores each recovered paint from one more random view. `progress(done, total)`.
+/// Recovers the paints of `samples` procedural shapes (the four of
+/// [`crate::voxel::shapes::Family::ALL`] in turn, seeds no dataset draws) painted with the
+/// texture decoder's held-out paints (never seen in its training), each from `views`
+/// reference images at random cameras (radius 3.3-4.5) and lights, both known; scores each
+/// recovered paint from one more random view. `progress(done, total)`.
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate_textures(
     gpu: &Gpu,

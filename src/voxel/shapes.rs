@@ -193,7 +193,7 @@ pub enum Family {
 
 impl Family {
     /// The four families of `dataset --shapes mixed`, in its order (furniture and CSG
-    /// primitives: every surface flat, cylindrical or spherical).
+    /// primitives: every surface flat, cylindrical, conical or spherical).
     pub const ALL: [Family; 4] = [
         Family::Chair,
         Family::Table,

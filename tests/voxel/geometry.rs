@@ -384,3 +384,51 @@ fn rotated_ellipsoid_bounds_are_exact() {
         assert!((local.length() - 1.0).abs() < 1e-4, "mesh vertex {p:?} is off the surface");
     }
 }
+
+/// Every family's shape is normalised (its added solids' bounds centred, longest side 2, to
+/// f32 rounding:
+/// [`shapes::Shape::new`] scales every solid kind alike) and the creatures are one piece (the
+/// largest 6-connected component of the 48^3 grid holds nearly every voxel; thin tails may
+/// lose a voxel or two to sampling).
+#[test]
+fn shapes_are_normalised_and_creatures_are_one_piece() {
+    for family in Family::VARIED {
+        for seed in 0..12 {
+            let shape = family.generate(seed);
+            let (lo, hi) = shape.parts.iter().filter(|(op, _)| *op == shapes::Op::Union).map(|(_, s)| s.bounds()).fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (a, b)| (lo.min(a), hi.max(b)));
+            assert!(((hi - lo).max_element() - 2.0).abs() < 1e-3 && (lo + hi).abs().max_element() < 1e-3, "{family:?} {seed}: bounds {lo} {hi}");
+        }
+    }
+    let n = 48;
+    for seed in 0..40 {
+        let g = shapes::creature(seed).to_grid(n).unwrap();
+        let occ: Vec<bool> = g.occupancy().iter().map(|&v| v >= 0.5).collect();
+        let total = occ.iter().filter(|&&o| o).count();
+        let mut seen = vec![false; occ.len()];
+        let mut largest = 0;
+        for start in 0..occ.len() {
+            if !occ[start] || seen[start] {
+                continue;
+            }
+            let (mut stack, mut size) = (vec![start], 0);
+            seen[start] = true;
+            while let Some(i) = stack.pop() {
+                size += 1;
+                let (d, h, w) = (i / (n * n), i / n % n, i % n);
+                for (dd, dh, dw) in [(1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1)] {
+                    let (d2, h2, w2) = (d as i64 + dd, h as i64 + dh, w as i64 + dw);
+                    if [d2, h2, w2].iter().any(|&x| x < 0 || x >= n as i64) {
+                        continue;
+                    }
+                    let j = ((d2 as usize * n) + h2 as usize) * n + w2 as usize;
+                    if occ[j] && !seen[j] {
+                        seen[j] = true;
+                        stack.push(j);
+                    }
+                }
+            }
+            largest = largest.max(size);
+        }
+        assert!(largest as f64 >= 0.98 * total as f64, "creature {seed}: largest piece {largest} of {total} voxels");
+    }
+}

@@ -25,8 +25,10 @@ pub fn creature(seed: u64) -> Shape {
     // Body along z (front +z), raised on its legs.
     let (len, height, width) = (rng.range(0.3, 0.6), rng.range(0.15, 0.3), rng.range(0.12, 0.28));
     let legs = [0, 2, 4, 4][rng.below(4)];
-    let leg_h = if legs == 0 { 0.0 } else { rng.range(0.15, 0.6) };
     let pitch = if legs == 2 { rng.range(-1.2, -0.5) } else { rng.range(-0.2, 0.2) };
+    // Legs long enough that the pitched body's lowest point stays above the feet.
+    let dip = ((height * pitch.cos()).hypot(len * pitch.sin()) - 0.8 * height).max(0.0);
+    let leg_h = if legs == 0 { 0.0 } else { rng.range(0.15, 0.6).max(dip + 0.05) };
     let body_rot = Mat3::from_rotation_x(pitch);
     let body = Vec3::new(0.0, leg_h + height * 0.8, 0.0);
     p.push(ellipsoid(body, Vec3::new(width, height, len), body_rot));
@@ -51,7 +53,7 @@ pub fn creature(seed: u64) -> Shape {
     if neck_len > 0.05 {
         p.push(limb(front, head, rng.range(0.04, 0.1), rng.range(0.03, 0.06)));
     }
-    let head_rot = Mat3::from_euler(EulerRot::YXZ, 0.0, rng.range(-0.6, 0.6), 0.0);
+    let head_rot = Mat3::from_rotation_x(rng.range(-0.6, 0.6));
     p.push(ellipsoid(head, Vec3::new(head_r, head_r * rng.range(0.7, 1.1), head_r * rng.range(1.0, 1.8)), head_rot));
     if rng.chance(0.5) {
         // A snout or a trunk.
@@ -73,19 +75,23 @@ pub fn creature(seed: u64) -> Shape {
     Shape::new(Family::Creature, p)
 }
 
-/// 3-7 ellipsoids, each overlapping one placed before it.
+/// 3-7 ellipsoids, each centred inside one placed before it (so the cluster is one piece).
 fn cluster(rng: &mut SplitMix64) -> Vec<(Op, Solid)> {
-    let mut p: Vec<(Op, Solid)> = Vec::new();
-    let mut centres = vec![Vec3::ZERO];
+    let mut parts: Vec<(Vec3, Vec3, Mat3)> = Vec::new();
     for k in 0..3 + rng.below(5) {
         let size = if k == 0 { 1.0 } else { rng.range(0.3, 0.8) };
         let radii = Vec3::new(rng.range(0.3, 1.0), rng.range(0.3, 1.0), rng.range(0.3, 1.0)) * size * 0.5;
         let rot = Mat3::from_euler(EulerRot::YXZ, rng.range(0.0, 3.2), rng.range(-0.8, 0.8), rng.range(-0.8, 0.8));
-        let near = centres[rng.below(centres.len())];
-        let dir = Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)).normalize_or_zero();
-        let center = if k == 0 { near } else { near + dir * rng.range(0.2, 0.45) };
-        centres.push(center);
-        p.push(ellipsoid(center, radii, rot));
+        let center = if parts.is_empty() {
+            Vec3::ZERO
+        } else {
+            let (c, r, q) = parts[rng.below(parts.len())];
+            let dir = Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)).normalize_or(Vec3::X);
+            // The parent's surface lies `1 / |diag(1 / r) q^T dir|` from its centre along `dir`.
+            let reach = 1.0 / ((q.transpose() * dir) / r).length();
+            c + dir * reach * rng.range(0.5, 0.95)
+        };
+        parts.push((center, radii, rot));
     }
-    p
+    parts.into_iter().map(|(c, r, q)| ellipsoid(c, r, q)).collect()
 }
