@@ -223,6 +223,15 @@ impl Family {
     }
 }
 
+/// Axis-aligned bounds of the added (union) solids of `parts`.
+fn added_bounds(parts: &[(Op, Solid)]) -> (Vec3, Vec3) {
+    parts
+        .iter()
+        .filter(|(op, _)| *op == Op::Union)
+        .map(|(_, s)| s.bounds())
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (a, b)| (lo.min(a), hi.max(b)))
+}
+
 /// A procedural shape: solids applied in order, normalised into `[-1, 1]^3`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Shape {
@@ -236,13 +245,7 @@ impl Shape {
     /// Builds a shape from parts in any units and normalises it (see the module docs); the
     /// bounds are those of the added solids, as carving can only shrink the shape.
     pub fn new(family: Family, parts: Vec<(Op, Solid)>) -> Shape {
-        let added = parts
-            .iter()
-            .filter(|(op, _)| *op == Op::Union)
-            .map(|(_, s)| s.bounds());
-        let (lo, hi) = added.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (a, b)| {
-            (lo.min(a), hi.max(b))
-        });
+        let (lo, hi) = added_bounds(&parts);
         let longest = (hi - lo).max_element();
         if !(longest.is_finite() && longest > 0.0) {
             return Shape { family, parts };
@@ -256,6 +259,12 @@ impl Shape {
                 .map(|(op, solid)| (*op, solid.transformed(s, t)))
                 .collect(),
         }
+    }
+
+    /// Bounds of the added solids (carving only shrinks the shape): centred, longest side 2,
+    /// once normalised.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        added_bounds(&self.parts)
     }
 
     /// Whether a point of the `[-1, 1]^3` frame is inside the shape.

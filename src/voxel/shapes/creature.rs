@@ -34,12 +34,12 @@ pub fn creature(seed: u64) -> Shape {
     p.push(ellipsoid(body, Vec3::new(width, height, len), body_rot));
     let leg_r = rng.range(0.03, 0.08);
     let spread = rng.range(0.5, 0.9);
-    let feet: Vec<(f32, f32)> = match legs {
-        2 => vec![(-1.0, 0.0), (1.0, 0.0)],
-        4 => vec![(-1.0, 1.0), (1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)],
-        _ => Vec::new(),
+    let feet: &[(f32, f32)] = match legs {
+        2 => &[(-1.0, 0.0), (1.0, 0.0)],
+        4 => &[(-1.0, 1.0), (1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)],
+        _ => &[],
     };
-    for (sx, sz) in feet {
+    for &(sx, sz) in feet {
         let hip = body + Vec3::new(sx * width * 0.6, -height * 0.3, sz * len * spread * 0.8);
         let foot = Vec3::new(hip.x * rng.range(1.0, 1.3), 0.0, hip.z + rng.range(-0.05, 0.05));
         p.push(limb(foot, hip, leg_r * rng.range(0.6, 1.0), leg_r));
