@@ -175,7 +175,7 @@ fn render_compare_prints_every_score_beside_the_black_floor() {
 /// 17.8 dB), far above the all-black floor (7.6): a corrupted file, other weights of another
 /// preset or the embedded tiny's copied in its place fail.
 #[test]
-fn the_varied_fine_tune_renders_the_bunny_like_tiny() {
+fn the_varied_fine_tune_renders_the_bunny_better_than_tiny() {
     let w = concat!(env!("CARGO_MANIFEST_DIR"), "/weights/tiny-phong-varied.safetensors");
     let (_, meta) = rendernet::graph::params::parse_safetensors(&std::fs::read(w).unwrap(), w).unwrap();
     assert_eq!((meta.get("preset").map(String::as_str), meta.get("input").map(String::as_str)), (Some("tiny"), Some("64")), "{meta:?}");
