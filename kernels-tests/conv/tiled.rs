@@ -126,6 +126,23 @@ fn texture_heads_of_at_most_eight_output_channels() {
     check(&with(conv2d([3, 3], [2, 1], Padding::Same), 8, 6, [1, 13, 5]), 103);
 }
 
+/// The narrow 3x3 heads' forward on the unpacked input (`conv_nchw_forward3x3`, forced by
+/// `ConvKernel::Nchw`; the backward passes run the texture family): heights past one block of
+/// 8 rows and short of it (9, 17, 7, 3, 10), one vec4 column (width 4) and several (8, 12,
+/// 20, 16), 1 to 8 output channels (5 and 8: a second group of 4, part-filled and full), 1, 5,
+/// 16 and 64 input channels (64 fills the weight block), batch 2 with a bias. Each case first asserts that the kernel runs, so a narrower `fits` fails
+/// here instead of quietly testing the texture family.
+#[test]
+fn unpacked_heads_forward() {
+    for (ci, co, input, seed) in [(5, 3, [1, 7, 12], 120), (16, 4, [1, 9, 8], 121), (1, 1, [1, 17, 4], 122), (64, 2, [1, 3, 20], 123), (16, 5, [1, 10, 16], 124), (7, 8, [1, 9, 12], 125)] {
+        let c = Case { ci, co, input, kernel: ConvKernel::Nchw, ..conv2d([3, 3], [1, 1], Padding::Same) };
+        let Op::Conv(op) = c.op else { unreachable!() };
+        let unpacked = op.forward_reads_unpacked(c.kernel, gpu(), &shape(true, c.n, ci, input), &w_shape(&c)).unwrap();
+        assert!(unpacked, "{c:?}: the unpacked kernel does not run");
+        check(&c, seed);
+    }
+}
+
 /// Widths that are multiples of 4 (12 and 8, not powers of two), where the texture family
 /// packs its unfolded operands four voxels along W per load (`conv_fast_pack_tex_w4`): the
 /// forward's x and the backward passes' dy (12 wide at stride 1; 4 wide after stride 3), with

@@ -29,7 +29,8 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 5)]
     repeat: usize,
     /// Which conv kernels, comma-separated: reference (one output per invocation), fast
-    /// (tiled, storage buffers), texture (tiled, textures + subgroup shuffles), or all.
+    /// (tiled, storage buffers), texture (tiled, textures + subgroup shuffles), nchw (texture,
+    /// but the narrow 3x3 heads' forward reads its input unpacked: rows only there), or all.
     /// For the resampling rows, fast reads the grid from its storage buffer, texture from a
     /// texture. Kernels of one case are sampled in turn, so they see the same machine load.
     #[arg(long, default_value = "all")]
@@ -71,8 +72,8 @@ fn pass_name(p: Pass) -> &'static str {
 
 const PASSES: [Pass; 3] = [Pass::Forward, Pass::BackwardInput, Pass::BackwardWeight];
 
-const KERNELS: [(&str, ConvKernel); 3] =
-    [("reference", ConvKernel::Reference), ("fast", ConvKernel::Buffers), ("texture", ConvKernel::Texture)];
+const KERNELS: [(&str, ConvKernel); 4] =
+    [("reference", ConvKernel::Reference), ("fast", ConvKernel::Buffers), ("texture", ConvKernel::Texture), ("nchw", ConvKernel::Nchw)];
 
 /// Whether `--kernel` `choice` (comma-separated, or `all`) names kernel `name`.
 fn chosen(choice: &str, name: &str) -> bool {
@@ -94,6 +95,10 @@ fn conv_cases(gpu: &Gpu, op: &'static str, shape: &str, c: Conv, xs: &[usize], w
     for pass in PASSES {
         for (name, k) in kernels(choice) {
             if name != "reference" && !c.runs_fast(k, pass, xs, ws)? {
+                continue;
+            }
+            // `nchw` differs from `texture` only in the forward of the narrow 3x3 heads.
+            if name == "nchw" && (pass != Pass::Forward || !c.forward_reads_unpacked(k, gpu, xs, ws)?) {
                 continue;
             }
             let (x, w, y, b) = (x.clone(), w.clone(), y.clone(), b.clone());
@@ -118,7 +123,7 @@ fn transposed_cases(gpu: &Gpu, shape: &str, t: ConvTranspose, xs: &[usize], ws: 
     let mut out = Vec::new();
     for pass in PASSES {
         for (name, k) in kernels(choice) {
-            if name != "reference" && !t.runs_fast(k, pass, xs, ws, &ys)? {
+            if name == "nchw" || (name != "reference" && !t.runs_fast(k, pass, xs, ws, &ys)?) {
                 continue;
             }
             let (x, w, y, b) = (x.clone(), w.clone(), y.clone(), b.clone());
@@ -142,7 +147,7 @@ fn projection_cases(gpu: &Gpu, choice: &str) -> Result<Vec<Case>> {
     let shape = format!("{k}->{o} 1x1 on {h}x{w}, batch {n}");
     let mut out = Vec::new();
     for pass in PASSES {
-        for (name, kern) in kernels(choice) {
+        for (name, kern) in kernels(choice).into_iter().filter(|(n, _)| *n != "nchw") {
             let (x, wt, b, y) = (x.clone(), wt.clone(), b.clone(), y.clone());
             let record: Recorder = match pass {
                 Pass::Forward => Box::new(move |g, p| projection::forward(kern, g, p, &x, &wt, &b, &y)),
@@ -343,7 +348,7 @@ fn profile_text(times: &[OpTime], wall_ms: f64) -> String {
 pub fn run(a: BenchArgs) -> Result<()> {
     if let Some(bad) = a.kernel.split(',').map(str::trim).find(|k| *k != "all" && !KERNELS.iter().any(|(n, _)| n == k)) {
         return Err(rendernet::Error::Invalid(format!(
-            "--kernel: unknown kernel '{bad}'; expected a comma-separated list of reference, fast, texture, or all"
+            "--kernel: unknown kernel '{bad}'; expected a comma-separated list of reference, fast, texture, nchw, or all"
         )));
     }
     let with_model = a.filter.as_deref().is_none_or(|f| "rendernet".contains(f));

@@ -23,6 +23,13 @@ use super::Gpu;
 use super::memo::{ACTIVE, TexKey};
 use super::Tensor;
 
+thread_local! {
+    /// Whether the node being recorded would keep its packings for its backward, whether or
+    /// not a memo is active: what [`Gpu::keeping_packs`] answers, so a run that makes fresh
+    /// objects (`Executor::reuse_gpu_objects(false)`) runs the same kernels as one that reuses.
+    static NODE_KEEPS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
 /// One kept packing: the node that made it, the tensor and packing it holds.
 struct Kept {
     node: usize,
@@ -65,11 +72,19 @@ impl Gpu {
     /// The executor: node `node`'s forward or backward is being recorded (`None`: neither),
     /// and whether the operand textures it packs are kept until its backward ends.
     pub(crate) fn recording_node(&self, node: Option<(usize, bool)>) {
+        NODE_KEEPS.with(|k| k.set(node.is_some_and(|(_, keep)| keep)));
         ACTIVE.with(|a| {
             if let Some(m) = a.borrow_mut().as_mut() {
                 m.kept.node = node;
             }
         });
+    }
+
+    /// Whether the node being recorded keeps the operand textures it packs for its backward
+    /// (a training or backward run through its weights): a forward that packs nothing then
+    /// leaves the packing to the backward, at no saving.
+    pub(crate) fn keeping_packs(&self) -> bool {
+        NODE_KEEPS.with(|k| k.get())
     }
 
     /// The executor, after node `node`'s backward: its kept textures go back to the pool.

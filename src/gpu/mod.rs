@@ -50,6 +50,9 @@ pub struct Gpu {
     /// Whether `ConvKernel::Auto` reads textures (decided once per device by
     /// `ops::conv_fast::calibrated`).
     pub(crate) conv_textures: std::sync::OnceLock<bool>,
+    /// Whether `ConvKernel::Auto` runs the narrow heads' forward on the unpacked input
+    /// (decided once per device by `ops::conv_nchw::wins`).
+    pub(crate) conv_nchw: std::sync::OnceLock<bool>,
 }
 
 impl Gpu {
@@ -74,6 +77,7 @@ impl Gpu {
             modules: Mutex::new(HashMap::new()),
             dummy,
             conv_textures: Default::default(),
+            conv_nchw: Default::default(),
         })
     }
 

@@ -5,7 +5,7 @@
 //! `shaders/conv_fast.wgsl` (module `conv_fast`) run behind the same methods where
 //! [`ConvKernel::Auto`] picks them. Both are deterministic.
 
-use super::{conv_fast, expect_rank, expect_shape};
+use super::{conv_fast, conv_nchw, expect_rank, expect_shape};
 use crate::error::{Error, Result, shape_err};
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
@@ -29,6 +29,10 @@ pub enum ConvKernel {
     /// the buffer kernels where the device lacks subgroups of 8 or the textures would exceed
     /// its limits.
     Texture,
+    /// As `Texture`, but the forward of the narrow 3x3 heads (2D, stride 1, padding 1, at
+    /// most 4 output channels, width a multiple of 4) reads its input unpacked
+    /// (`shaders/conv_nchw.wgsl`); `Auto` does so where it measured faster on this machine.
+    Nchw,
 }
 
 /// How a conv pads its input, per spatial axis (depth, height, width).
@@ -194,6 +198,13 @@ impl Conv {
     /// and weights `w_shape` (for benchmarks and tests; see `use_fast` for the rule).
     pub fn runs_fast(&self, kernel: ConvKernel, pass: Pass, x_shape: &[usize], w_shape: &[usize]) -> Result<bool> {
         Ok(use_fast(kernel, pass, &self.geometry("conv", x_shape, w_shape)?))
+    }
+
+    /// Whether `kernel` runs this conv's forward on input `x_shape` and weights `w_shape`
+    /// with the input unpacked (`ConvKernel::Nchw`; `Auto` where it measured faster), for
+    /// benchmarks and tests.
+    pub fn forward_reads_unpacked(&self, kernel: ConvKernel, gpu: &Gpu, x_shape: &[usize], w_shape: &[usize]) -> Result<bool> {
+        Ok(use_fast(kernel, Pass::Forward, &self.geometry("conv", x_shape, w_shape)?) && uses_nchw(kernel, gpu, &self.geometry("conv", x_shape, w_shape)?))
     }
 
     /// Resolves the shapes of a call, checking everything the kernels rely on.
@@ -415,6 +426,7 @@ pub(crate) fn use_fast(kernel: ConvKernel, _pass: Pass, _g: &Geometry) -> bool {
 /// timed or counted step.
 pub fn calibrate(gpu: &Gpu) {
     conv_fast::calibrated(gpu);
+    conv_nchw::wins(gpu);
 }
 
 /// Whether the forward of `g` on `kernel` runs kernels that apply a PReLU (see
@@ -428,9 +440,17 @@ pub(crate) fn fuses_prelu(kernel: ConvKernel, gpu: &Gpu, g: &Geometry) -> bool {
 pub(crate) fn operands(gpu: &Gpu, kernel: ConvKernel) -> conv_fast::Operands {
     match kernel {
         ConvKernel::Buffers => conv_fast::Operands::Buffers,
-        ConvKernel::Texture => conv_fast::Operands::Textures,
+        ConvKernel::Texture | ConvKernel::Nchw => conv_fast::Operands::Textures,
         _ => conv_fast::calibrated(gpu),
     }
+}
+
+/// Whether the forward of `g` on `kernel` reads its input unpacked (`conv_nchw`): forced by
+/// `Nchw`; with `Auto` where it measured faster (`conv_nchw::wins`) and the packing would not
+/// be kept for the weight gradient (a training step's texture packing serves the forward and
+/// the weight gradient, so skipping it in the forward saves nothing there).
+fn uses_nchw(kernel: ConvKernel, gpu: &Gpu, g: &Geometry) -> bool {
+    conv_nchw::fits(g) && (kernel == ConvKernel::Nchw || (kernel == ConvKernel::Auto && !gpu.keeping_packs() && conv_nchw::wins(gpu)))
 }
 
 /// Records the forward conv of `g` (shapes already checked by the caller): `y = conv(x, w) + b`.
@@ -446,6 +466,9 @@ pub(crate) fn dispatch_forward(
     y: &Tensor,
 ) -> Result<()> {
     if use_fast(kernel, Pass::Forward, g) {
+        if uses_nchw(kernel, gpu, g) {
+            return conv_nchw::forward(gpu, pass, g, x, w, b, y);
+        }
         return conv_fast::forward(gpu, pass, g, x, w, b, y, operands(gpu, kernel));
     }
     let args = [Arg::R(x), Arg::R(w), bias_arg(b), Arg::W(y)];

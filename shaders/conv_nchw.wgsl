@@ -1,0 +1,139 @@
+// The narrow 3x3 heads' forward (2D, stride 1, padding 1, at most 8 output channels, W a
+// multiple of 4) on the input as it lies, NCHW, with no packing. src/ops/conv_nchw.rs binds it,
+// one dispatch per group of 4 output channels (og, og + 1, ...: the group's first is og).
+//
+// Why: the texture family first packs x into an rgba32f texture, and on lavapipe a
+// storage-texture store costs ~470 FMAs per 8-lane vector (Intel Xeon family 6 model 167,
+// `rendernet bench --operands`): packing the 16->3 head's 128x128x16 input took ~1.0 of its
+// 1.45 ms forward. Here each lane reads 4 consecutive outputs' input (one vec4 along W of a
+// channel row, and its two neighbours' vec4s for the W taps) straight from the storage buffer.
+// The backward passes keep the texture family.
+//
+// Lane: 4 outputs along W (vec4 column t) x 8 rows x the group's 4 output channels, 32 vec4
+// accumulators carried over the loop on input channels. Weights: packed once per weight tensor
+// (conv_nchw_pack_weights) as wk[c * 9 + tap] = output channels og..og+3 of input channel c at tap
+// (kh * 3 + kw), read through a uniform binding (lane-uniform, ~10 FMAs a load).
+
+struct NchwParams { n: u32, ci: u32, co: u32, h: u32, w4: u32, hb: u32, has_bias: u32, total: u32, og: u32, pad0: u32, pad1: u32, pad2: u32 }
+@group(0) @binding(0) var<uniform> q: NchwParams;
+
+// ---- weights: [co, ci, 3, 3] (OIHW), the group's 4 output channels -> wk, zero past co ----
+@group(0) @binding(1) var<storage, read> wsrc: array<f32>;
+@group(0) @binding(2) var<storage, read_write> wdst: array<vec4<f32>>;
+
+fn weight_or_zero(k: u32, i: u32) -> f32 {
+    let o = q.og + k;
+    return select(0.0, wsrc[min(o, q.co - 1u) * q.ci * 9u + i], o < q.co);
+}
+
+@compute @workgroup_size(64)
+fn conv_nchw_pack_weights(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= q.ci * 9u) { return; }
+    wdst[i] = vec4<f32>(weight_or_zero(0u, i), weight_or_zero(1u, i), weight_or_zero(2u, i), weight_or_zero(3u, i));
+}
+
+// ---- forward ----
+@group(0) @binding(1) var<storage, read> x4: array<vec4<f32>>;
+// 576 vec4s: input channels up to 64 (src/ops/conv_nchw.rs checks).
+@group(0) @binding(2) var<uniform> wk: array<vec4<f32>, 576>;
+@group(0) @binding(3) var<storage, read> bias: array<f32>;
+@group(0) @binding(4) var<storage, read_write> y4: array<vec4<f32>>;
+
+// One input row's values under the lane's 4 outputs at W taps -1, 0 and +1.
+struct Taps { a: vec4<f32>, b: vec4<f32>, c: vec4<f32> }
+
+// Input row `row` (zero outside the image) of the channel plane at vec4 `plane`, column t.
+fn taps(plane: u32, row: i32, t: u32) -> Taps {
+    let inside = row >= 0 && row < i32(q.h);
+    let at = plane + u32(clamp(row, 0, i32(q.h) - 1)) * q.w4;
+    let m = select(vec4<f32>(0.0), x4[at + t], inside);
+    let l = select(vec4<f32>(0.0), x4[at + max(t, 1u) - 1u], inside && t > 0u);
+    let r = select(vec4<f32>(0.0), x4[at + min(t + 1u, q.w4 - 1u)], inside && t + 1u < q.w4);
+    return Taps(vec4<f32>(l.w, m.x, m.y, m.z), m, vec4<f32>(m.y, m.z, m.w, r.x));
+}
+
+// One output row's 4 W positions, per output channel.
+struct Out { o0: vec4<f32>, o1: vec4<f32>, o2: vec4<f32>, o3: vec4<f32> }
+
+// One kernel row's weights at W taps 0, 1, 2, each over the 4 output channels.
+struct Krow { a: vec4<f32>, b: vec4<f32>, c: vec4<f32> }
+
+fn krow(c: u32, kh: u32) -> Krow {
+    let i = c * 9u + kh * 3u;
+    return Krow(wk[i], wk[i + 1u], wk[i + 2u]);
+}
+
+fn mac(o: Out, x: Taps, k: Krow) -> Out {
+    return Out(o.o0 + k.a.x * x.a + k.b.x * x.b + k.c.x * x.c,
+               o.o1 + k.a.y * x.a + k.b.y * x.b + k.c.y * x.c,
+               o.o2 + k.a.z * x.a + k.b.z * x.b + k.c.z * x.c,
+               o.o3 + k.a.w * x.a + k.b.w * x.b + k.c.w * x.c);
+}
+
+// Output row r from input rows r - 1, r, r + 1.
+fn mac3(o: Out, x0: Taps, x1: Taps, x2: Taps, k0: Krow, k1: Krow, k2: Krow) -> Out {
+    return mac(mac(mac(o, x0, k0), x1, k1), x2, k2);
+}
+
+fn bias_or_zero(k: u32) -> f32 {
+    let o = k + q.og;
+    return select(0.0, bias[min(o, q.co - 1u)], q.has_bias != 0u && o < q.co);
+}
+
+fn put(n: u32, row: u32, t: u32, o: Out) {
+    if (row >= q.h) { return; }
+    let plane = q.h * q.w4;
+    let at = ((n * q.co + q.og) * q.h + row) * q.w4 + t;
+    y4[at] = o.o0;
+    if (q.og + 1u < q.co) { y4[at + plane] = o.o1; }
+    if (q.og + 2u < q.co) { y4[at + 2u * plane] = o.o2; }
+    if (q.og + 3u < q.co) { y4[at + 3u * plane] = o.o3; }
+}
+
+@compute @workgroup_size(64)
+fn conv_nchw_forward3x3(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= q.total) { return; }
+    let t = i % q.w4;
+    let rest = i / q.w4;
+    let r0 = i32((rest % q.hb) * 8u);
+    let n = rest / q.hb;
+    let b = vec4<f32>(0.0);
+    let init = Out(b + bias_or_zero(0u), b + bias_or_zero(1u), b + bias_or_zero(2u), b + bias_or_zero(3u));
+    var a0 = init; var a1 = init; var a2 = init; var a3 = init;
+    var a4 = init; var a5 = init; var a6 = init; var a7 = init;
+    for (var c = 0u; c < q.ci; c++) {
+        let plane = (n * q.ci + c) * q.h * q.w4;
+        let k0 = krow(c, 0u);
+        let k1 = krow(c, 1u);
+        let k2 = krow(c, 2u);
+        let x0 = taps(plane, r0 - 1, t);
+        let x1 = taps(plane, r0, t);
+        let x2 = taps(plane, r0 + 1, t);
+        let x3 = taps(plane, r0 + 2, t);
+        let x4_ = taps(plane, r0 + 3, t);
+        let x5 = taps(plane, r0 + 4, t);
+        let x6 = taps(plane, r0 + 5, t);
+        let x7 = taps(plane, r0 + 6, t);
+        let x8 = taps(plane, r0 + 7, t);
+        let x9 = taps(plane, r0 + 8, t);
+        a0 = mac3(a0, x0, x1, x2, k0, k1, k2);
+        a1 = mac3(a1, x1, x2, x3, k0, k1, k2);
+        a2 = mac3(a2, x2, x3, x4_, k0, k1, k2);
+        a3 = mac3(a3, x3, x4_, x5, k0, k1, k2);
+        a4 = mac3(a4, x4_, x5, x6, k0, k1, k2);
+        a5 = mac3(a5, x5, x6, x7, k0, k1, k2);
+        a6 = mac3(a6, x6, x7, x8, k0, k1, k2);
+        a7 = mac3(a7, x7, x8, x9, k0, k1, k2);
+    }
+    let r = u32(r0);
+    put(n, r, t, a0);
+    put(n, r + 1u, t, a1);
+    put(n, r + 2u, t, a2);
+    put(n, r + 3u, t, a3);
+    put(n, r + 4u, t, a4);
+    put(n, r + 5u, t, a5);
+    put(n, r + 6u, t, a6);
+    put(n, r + 7u, t, a7);
+}
