@@ -91,9 +91,11 @@ fn put(n: u32, row: u32, t: u32, o: Out) {
     if (q.og + 3u < q.co) { y4[at + 3u * plane] = o.o3; }
 }
 
+// One invocation per vec4 column, block of 8 rows and item, over a grid_1d grid (2D past
+// 65535 workgroups).
 @compute @workgroup_size(64)
-fn conv_nchw_forward3x3(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
+fn conv_nchw_forward3x3(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = gid.x + gid.y * nwg.x * 64u;
     if (i >= q.total) { return; }
     let t = i % q.w4;
     let rest = i / q.w4;

@@ -130,7 +130,9 @@ fn texture_heads_of_at_most_eight_output_channels() {
 /// `ConvKernel::Nchw`; the backward passes run the texture family): heights past one block of
 /// 8 rows and short of it (9, 17, 7, 3, 10), one vec4 column (width 4) and several (8, 12,
 /// 20, 16), 1 to 8 output channels (5 and 8: a second group of 4, part-filled and full), 1, 5,
-/// 16 and 64 input channels (64 fills the weight block), batch 2 with a bias. Each case first asserts that the kernel runs, so a narrower `fits` fails
+/// 7, 16 and 64 input channels (64 fills the weight block), batch 2 with a bias. Then, with no
+/// bias: a 3x3 stride-1 transposed conv from 2 to 7 channels, whose input gradient is a
+/// forward conv of 7 to 2 channels the kernel computes (width 8). Each case first asserts that the kernel runs, so a narrower `fits` fails
 /// here instead of quietly testing the texture family.
 #[test]
 fn unpacked_heads_forward() {
@@ -141,6 +143,7 @@ fn unpacked_heads_forward() {
         assert!(unpacked, "{c:?}: the unpacked kernel does not run");
         check(&c, seed);
     }
+    check(&Case { ci: 2, co: 7, input: [1, 5, 8], kernel: ConvKernel::Nchw, ..transposed2d([3, 3], [1, 1], Padding::Same, None) }, 126);
 }
 
 /// Widths that are multiples of 4 (12 and 8, not powers of two), where the texture family

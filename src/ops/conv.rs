@@ -14,11 +14,14 @@ const SHADER: Shader = wgsl!("conv");
 /// Which kernels a conv, transposed-conv or projection call runs. Pass `Auto` (the
 /// `Default`, what the graph executor uses): the tiled kernels, reading textures or buffers
 /// by a per-device calibration (cached on disk; `RENDERNET_CONV_OPERANDS=buffers|textures`
-/// overrides it). The others force a choice so tests and `rendernet bench` can compare them
-/// on the same call.
+/// overrides it), and the narrow heads' forward unpacked where a second calibration says so
+/// (`RENDERNET_CONV_HEADS=nchw|packed` overrides it). The others force a choice so tests and
+/// `rendernet bench` can compare them on the same call.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum ConvKernel {
-    /// The tiled kernels, textures or buffers by the device's calibration.
+    /// The tiled kernels, textures or buffers by the device's calibration; the narrow 3x3
+    /// heads' forward unpacked (as `Nchw`) where that measured faster and no weight gradient
+    /// will reuse its packing (runs without one: render, eval, invert).
     #[default]
     Auto,
     /// The reference kernels: one invocation per output value.
@@ -30,8 +33,9 @@ pub enum ConvKernel {
     /// its limits.
     Texture,
     /// As `Texture`, but the forward of the narrow 3x3 heads (2D, stride 1, padding 1, at
-    /// most 4 output channels, width a multiple of 4) reads its input unpacked
-    /// (`shaders/conv_nchw.wgsl`); `Auto` does so where it measured faster on this machine.
+    /// most 8 output channels and 64 input channels, width a multiple of 4) reads its input
+    /// unpacked (`shaders/conv_nchw.wgsl`), and so does a transposed conv's input gradient
+    /// of that shape (a forward conv).
     Nchw,
 }
 
@@ -204,7 +208,8 @@ impl Conv {
     /// with the input unpacked (`ConvKernel::Nchw`; `Auto` where it measured faster), for
     /// benchmarks and tests.
     pub fn forward_reads_unpacked(&self, kernel: ConvKernel, gpu: &Gpu, x_shape: &[usize], w_shape: &[usize]) -> Result<bool> {
-        Ok(use_fast(kernel, Pass::Forward, &self.geometry("conv", x_shape, w_shape)?) && uses_nchw(kernel, gpu, &self.geometry("conv", x_shape, w_shape)?))
+        let g = self.geometry("conv", x_shape, w_shape)?;
+        Ok(use_fast(kernel, Pass::Forward, &g) && uses_nchw(kernel, gpu, &g))
     }
 
     /// Resolves the shapes of a call, checking everything the kernels rely on.
@@ -420,9 +425,9 @@ pub(crate) fn use_fast(kernel: ConvKernel, _pass: Pass, _g: &Geometry) -> bool {
     kernel != ConvKernel::Reference
 }
 
-/// Settles which operands [`ConvKernel::Auto`] reads on `gpu` (see `conv_fast::calibrated`):
-/// the first call on a machine times both kernel families on a small conv, later calls read
-/// the cached answer. Conv calls do this themselves; call it first to keep the cost out of a
+/// Settles which operands [`ConvKernel::Auto`] reads on `gpu` (see `conv_fast::calibrated`)
+/// and whether it runs the heads' forward unpacked (`conv_nchw::wins`): the first call on a
+/// machine times both choices on small convs, later calls read the cached answers. Conv calls do this themselves; call it first to keep the cost out of a
 /// timed or counted step.
 pub fn calibrate(gpu: &Gpu) {
     conv_fast::calibrated(gpu);
