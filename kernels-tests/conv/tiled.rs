@@ -132,8 +132,9 @@ fn texture_heads_of_at_most_eight_output_channels() {
 /// 20, 16), 1 to 8 output channels (5 and 8: a second group of 4, part-filled and full), 1, 5,
 /// 7, 16 and 64 input channels (64 fills the weight block), batch 2 with a bias. Then, with no
 /// bias: a 3x3 stride-1 transposed conv from 2 to 7 channels, whose input gradient is a
-/// forward conv of 7 to 2 channels the kernel computes (width 8). Each case first asserts that the kernel runs, so a narrower `fits` fails
-/// here instead of quietly testing the texture family.
+/// forward conv of 7 to 2 channels the kernel computes (width 8). Each conv case first asserts
+/// that the kernel runs, so a narrower `fits` fails here instead of quietly testing the
+/// texture family.
 #[test]
 fn unpacked_heads_forward() {
     for (ci, co, input, seed) in [(5, 3, [1, 7, 12], 120), (16, 4, [1, 9, 8], 121), (1, 1, [1, 17, 4], 122), (64, 2, [1, 3, 20], 123), (16, 5, [1, 10, 16], 124), (7, 8, [1, 9, 12], 125)] {

@@ -112,7 +112,8 @@ pub(crate) struct Geometry {
 }
 
 impl Geometry {
-    fn shape(&self, a: usize, b: usize, sp: [usize; 3]) -> Vec<usize> {
+    /// `[a, b, sp...]`, the depth dropped for 2D: an input, weight or output shape.
+    pub(super) fn shape(&self, a: usize, b: usize, sp: [usize; 3]) -> Vec<usize> {
         if self.rank == 4 { vec![a, b, sp[1], sp[2]] } else { vec![a, b, sp[0], sp[1], sp[2]] }
     }
     /// The forward conv's output shape.
@@ -427,8 +428,8 @@ pub(crate) fn use_fast(kernel: ConvKernel, _pass: Pass, _g: &Geometry) -> bool {
 
 /// Settles which operands [`ConvKernel::Auto`] reads on `gpu` (see `conv_fast::calibrated`)
 /// and whether it runs the heads' forward unpacked (`conv_nchw::wins`): the first call on a
-/// machine times both choices on small convs, later calls read the cached answers. Conv calls do this themselves; call it first to keep the cost out of a
-/// timed or counted step.
+/// machine times both choices on small convs, later calls read the cached answers. Conv calls
+/// do this themselves; call it first to keep the cost out of a timed or counted step.
 pub fn calibrate(gpu: &Gpu) {
     conv_fast::calibrated(gpu);
     conv_nchw::wins(gpu);

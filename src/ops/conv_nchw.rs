@@ -1,6 +1,7 @@
 //! The narrow 3x3 heads' forward on the unpacked input (`shaders/conv_nchw.wgsl`): 2D, stride
-//! 1, padding 1, at most 8 output channels (a dispatch per group of 4), W a multiple of 4. The texture family packs x into
-//! a texture first, and on lavapipe the texture stores cost more than the conv (README
+//! 1, padding 1, at most 8 output channels (a dispatch per group of 4), W a multiple of 4.
+//! The texture family packs x into a texture first, and on lavapipe the texture stores cost
+//! more than the conv (README
 //! "Measured: Intel Xeon (family 6 model 167)"); this kernel reads x where it lies. Whether it
 //! beats the packed kernel depends on the driver and the CPU (its storage loads are gathers,
 //! slow on an AMD Zen 3 with Mesa 22.3), so [`ConvKernel::Auto`](super::conv::ConvKernel)
@@ -59,8 +60,9 @@ fn params(g: &Geometry, has_bias: bool) -> NchwParams {
     NchwParams { n: g.n as u32, ci: g.ci as u32, co: g.co as u32, h, w4, hb, has_bias: has_bias as u32, total: g.n as u32 * hb * w4, ..Default::default() }
 }
 
-/// `w` ([co, ci, 3, 3]) packed for the kernel's dispatch `p` (its group of output channels): kept from one run of a graph to the next while
-/// the parameters do not change, like the tiled kernels' weight packings.
+/// `w` ([co, ci, 3, 3]) packed for the kernel's dispatch `p` (its group of output channels):
+/// kept from one run of a graph to the next while the parameters do not change, like the
+/// tiled kernels' weight packings.
 fn packed_weights(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: NchwParams, w: &Tensor) -> Result<Tensor> {
     let shape = [MAX_CI * 9 * 4];
     let key = [b"conv_nchw".as_slice(), &p.og.to_le_bytes()].concat();
@@ -92,8 +94,8 @@ pub(crate) fn forward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry,
 
 /// Whether `ConvKernel::Auto` runs this kernel for the heads on `gpu`: `RENDERNET_CONV_HEADS`
 /// (`nchw` or `packed`) if set, else whether it ran a 16->3 head on 64x64 faster than the
-/// tiled family `Auto` reads (`conv_fast::calibrated`) and to the same bits (best of 3 timed runs each), measured once per machine
-/// and cached (`Gpu::calibrated_choice`).
+/// tiled family `Auto` reads (`conv_fast::calibrated`) and to the same bits (best of 3 timed
+/// runs each), measured once per machine and cached (`Gpu::calibrated_choice`).
 pub(crate) fn wins(gpu: &Gpu) -> bool {
     *gpu.conv_nchw.get_or_init(|| match std::env::var("RENDERNET_CONV_HEADS").as_deref() {
         Ok("nchw") => true,

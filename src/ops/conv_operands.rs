@@ -57,12 +57,10 @@ pub(super) fn second_wins(
     run: impl Fn(usize, &mut wgpu::ComputePass<'_>, &Tensor, &Tensor, &Tensor) -> Result<()>,
 ) -> Result<bool> {
     let ramp = |len: usize, k: usize| (0..len).map(|i| ((i * k) % 7) as f32 / 8.0 - 0.375).collect::<Vec<_>>();
-    let taps: usize = g.kernel.iter().product();
-    let sp = |s: [usize; 3]| if g.rank == 4 { vec![s[1], s[2]] } else { s.to_vec() };
-    let shape = |c: usize, s: [usize; 3]| [vec![g.n, c], sp(s)].concat();
-    let x = Tensor::from_slice(gpu, &shape(g.ci, g.input), &ramp(g.n * g.ci * g.input.iter().product::<usize>(), 5))?;
-    let w = Tensor::from_slice(gpu, &[vec![g.co, g.ci], sp(g.kernel)].concat(), &ramp(g.co * g.ci * taps, 3))?;
-    let ys = [Tensor::zeros(gpu, &shape(g.co, g.output))?, Tensor::zeros(gpu, &shape(g.co, g.output))?];
+    let ramped = |shape: Vec<usize>, k: usize| Tensor::from_slice(gpu, &shape, &ramp(shape.iter().product(), k));
+    let x = ramped(g.shape(g.n, g.ci, g.input), 5)?;
+    let w = ramped(g.shape(g.co, g.ci, g.kernel), 3)?;
+    let ys = [Tensor::zeros(gpu, &g.y_shape())?, Tensor::zeros(gpu, &g.y_shape())?];
     let mut best = [f64::INFINITY; 2];
     for round in 0..4 {
         for (k, y) in ys.iter().enumerate() {
