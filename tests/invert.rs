@@ -443,7 +443,7 @@ fn eval_invert_reports_every_sample_and_splits_lights_by_side() {
     let test = ds.split(rendernet::data::Split::Test);
     let mut front = 0;
     for (i, s) in per.iter().enumerate() {
-        for k in ["pose_degrees", "light_degrees", "light_optimum_degrees", "light_exact_degrees", "light_exact_truth_degrees"] {
+        for k in ["pose_degrees", "network_pose_degrees", "light_degrees", "light_optimum_degrees", "light_exact_degrees", "light_exact_truth_degrees"] {
             let a = s[k].as_f64().unwrap();
             assert!((0.0..=180.0).contains(&a), "sample {i}: {k} = {a}");
         }
@@ -486,4 +486,44 @@ fn a_light_network_picks_the_light_at_the_recovered_camera() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success() && err.contains("--light-network") && err.contains(says), "{args:?}: {err}");
     }
+}
+
+/// `--pick exact` (`Pick::Exact`, the default): the exact renderer's maps of the known grid
+/// rank the search's hypotheses. Of the true camera, its far-side twin, a view 40 degrees
+/// round and one 15 degrees higher, `Inverter::exact_scores` puts the truth first (the
+/// target is the reference renderer's own image of that grid, so the truth scores near zero:
+/// only the 20-degree light grid's step is left). A small search then ends at a camera whose
+/// exact score is no worse than the network's own pick's, and with `Pick::Network` the
+/// estimate is the network's pick.
+#[test]
+fn the_exact_renderer_picks_the_camera_among_the_hypotheses() {
+    use rendernet::invert::{InvertOptions, Pick};
+    let gpu = Gpu::new().unwrap();
+    let bunny = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/datasets/fixtures/bunny64.safetensors")).unwrap();
+    let grid = voxel::safetensors_io::from_bytes(&bunny, "bunny64").unwrap();
+    let view = View { azimuth: 200.0, elevation: 70.0, radius: 3.8 };
+    let light = Light { azimuth: 20.0, elevation: 70.0, ..Light::default() };
+    let opts = reference::Options { supersample: 2, ..reference::Options::default() };
+    let target = reference::RayMarcher::new(&gpu).with_options(opts).render(&gpu, &grid, &view, &light, Shader::Phong, 128).unwrap();
+    let inv = Inverter::new(Preset::tiny(), TINY_PHONG_WEIGHTS, "embedded tiny", Light::default()).unwrap();
+    let views = [
+        View { azimuth: 20.0, ..view },
+        View { azimuth: 240.0, ..view },
+        view,
+        View { elevation: 55.0, ..view },
+    ];
+    let s = inv.exact_scores(&gpu, &grid, &target, &views).unwrap();
+    eprintln!("exact scores (twin, +40 azimuth, truth, 15 higher): {s:?}");
+    for k in [0, 1, 3] {
+        assert!(s[2] < s[k], "view {k} scores {} against the truth's {}", s[k], s[2]);
+    }
+
+    let o = InvertOptions { azimuths: 4, elevations: 2, keep: 1, steps: 3, ..Default::default() };
+    assert_eq!(o.pick, Pick::Exact, "the default");
+    let est = inv.invert(&gpu, &grid, &target, &o, |_, _| {}).unwrap();
+    let s = inv.exact_scores(&gpu, &grid, &target, &[est.view, est.network_view]).unwrap();
+    eprintln!("exact scores of the estimate and the network's pick: {s:?}");
+    assert!(s[0] <= s[1], "the exact pick scores {} against the network's {}", s[0], s[1]);
+    let net = inv.invert(&gpu, &grid, &target, &InvertOptions { pick: Pick::Network, ..o }, |_, _| {}).unwrap();
+    assert_eq!((net.view.azimuth, net.view.elevation), (net.network_view.azimuth, net.network_view.elevation));
 }

@@ -7,7 +7,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rendernet::bench::median;
 use rendernet::data::Dataset;
-use rendernet::invert::{self, InvertOptions, Inverter, angle_between, light_direction, view_direction};
+use rendernet::invert::{self, InvertOptions, Inverter, Pick, angle_between, light_direction, view_direction};
 use rendernet::nn::rendernet::Head;
 use rendernet::train::head_for;
 use rendernet::train::eval::Interval;
@@ -15,6 +15,22 @@ use rendernet::reference::{self, Image, Light, Options, Shader};
 use rendernet::{Error, Gpu, Result};
 use std::path::PathBuf;
 use std::time::Instant;
+
+/// What `--pick` takes ([`Pick`]).
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+enum PickArg {
+    Exact,
+    Network,
+}
+
+impl PickArg {
+    fn pick(self) -> Pick {
+        match self {
+            PickArg::Exact => Pick::Exact,
+            PickArg::Network => Pick::Network,
+        }
+    }
+}
 
 /// What `--light-network` takes: the shipped Phong presets, or none.
 const LIGHT_NETWORKS: [&str; 4] = ["none", "nano", "tiny", "base"];
@@ -85,6 +101,12 @@ pub struct InvertArgs {
     /// none to keep the searching network's own light. Not with --prior or --texture.
     #[arg(long, value_name = "PRESET", default_value = "none", value_parser = LIGHT_NETWORKS, conflicts_with_all = ["prior", "texture"])]
     light_network: String,
+    /// What picks the camera among the search's hypotheses: exact (default) draws the refined
+    /// ones, the best unrefined views and the far-side twins of all with the reference renderer
+    /// from the known grid and keeps the one whose maps explain the image best; network keeps
+    /// the network's own lowest image MSE (the paper's way). With --prior the network picks.
+    #[arg(long, value_enum, default_value_t = PickArg::Exact)]
+    pick: PickArg,
     /// Print JSON (pose, light, MSE, errors when known, loss curve, seconds) instead of text.
     #[arg(long)]
     json: bool,
@@ -120,7 +142,7 @@ pub fn run(a: InvertArgs) -> Result<()> {
             (img, Some((view, light)))
         }
     };
-    let o = InvertOptions { azimuths: a.azimuths, elevations: a.elevations, keep: a.starts, steps: a.steps, ..Default::default() };
+    let o = InvertOptions { azimuths: a.azimuths, elevations: a.elevations, keep: a.starts, steps: a.steps, pick: a.pick.pick(), ..Default::default() };
     if let Some(prior) = &a.prior {
         return with_prior(&a, &gpu, &inv, prior.as_deref(), &grid, &target, truth, &o, t0);
     }
@@ -135,7 +157,7 @@ pub fn run(a: InvertArgs) -> Result<()> {
     let secs = t1.elapsed().as_secs_f64();
     reference::write_png(&image::DynamicImage::ImageRgb8(Image::side_by_side(&[&target, &est.image])?), &a.out)?;
     let errors = truth.map(|(v, l)| {
-        (angle_between(view_direction(&v), view_direction(&est.view)), angle_between(light_direction(&l), light_direction(&est.light)), est.view.radius / v.radius)
+        (angle_between(view_direction(&v), view_direction(&est.view)), angle_between(light_direction(&l), light_direction(&est.light)), est.view.radius / v.radius, angle_between(view_direction(&v), view_direction(&est.network_view)))
     });
     let psnr = -10.0 * est.mse.max(1e-10).log10();
     if a.json {
@@ -146,8 +168,11 @@ pub fn run(a: InvertArgs) -> Result<()> {
             "mse": est.mse, "psnr": psnr, "curve": est.curve, "seconds": secs, "out": a.out.display().to_string(),
             "light_network": a.light_network,
             "search_light_azimuth": est.search_light.azimuth, "search_light_elevation": est.search_light.elevation,
+            "pick": format!("{:?}", a.pick).to_lowercase(),
+            "network_azimuth": est.network_view.azimuth, "network_elevation": est.network_view.elevation, "network_radius": est.network_view.radius,
         });
-        if let Some((pe, le, rr)) = errors {
+        if let Some((pe, le, rr, ne)) = errors {
+            j["network_pose_error_degrees"] = ne.into();
             j["pose_error_degrees"] = pe.into();
             j["light_error_degrees"] = le.into();
             j["radius_ratio"] = rr.into();
@@ -161,8 +186,8 @@ pub fn run(a: InvertArgs) -> Result<()> {
         est.view.azimuth, est.view.elevation, est.view.radius, est.light.azimuth, est.light.elevation
     );
     println!("re-render against the input: MSE {:.5} (PSNR {psnr:.2} dB)", est.mse);
-    if let Some((pe, le, rr)) = errors {
-        println!("errors against the true scene: camera direction {pe:.1} deg, light direction {le:.1} deg, radius x{rr:.3}");
+    if let Some((pe, le, rr, ne)) = errors {
+        println!("errors against the true scene: camera direction {pe:.1} deg (the network's own pick: {ne:.1}), light direction {le:.1} deg, radius x{rr:.3}");
     }
     println!("wrote {} (input | network at the recovered pose) in {:.1} s ({secs:.1} s inverting on {})", a.out.display(), t0.elapsed().as_secs_f64(), gpu.info.name);
     Ok(())
@@ -286,6 +311,12 @@ pub struct EvalInvertArgs {
     /// none to keep the searching network's own light.
     #[arg(long, value_name = "PRESET", default_value = "none", value_parser = LIGHT_NETWORKS)]
     light_network: String,
+    /// What picks the camera among the search's hypotheses: exact (default) draws the refined
+    /// ones, the best unrefined views and the far-side twins of all with the reference renderer
+    /// from the known grid and keeps the one whose maps explain the image best; network keeps
+    /// the network's own lowest image MSE (the paper's way).
+    #[arg(long, value_enum, default_value_t = PickArg::Exact)]
+    pick: PickArg,
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
@@ -319,7 +350,7 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
     let ds = Dataset::open(&a.data)?;
     let (inv, name) = dataset_inverter(&a.net, &ds)?;
     let inv = light_network(inv, &a.light_network)?;
-    let o = InvertOptions { azimuths: a.azimuths, elevations: a.elevations, keep: a.starts, steps: a.steps, ..Default::default() };
+    let o = InvertOptions { azimuths: a.azimuths, elevations: a.elevations, keep: a.starts, steps: a.steps, pick: a.pick.pick(), ..Default::default() };
     let bar = ProgressBar::new(a.samples as u64);
     bar.set_style(ProgressStyle::with_template("{bar:30} {pos}/{len} images [{elapsed_precise}<{eta_precise}]").expect("static template"));
     let errs = invert::evaluate(&gpu, &inv, &ds, a.samples, &o, |done, total| {
@@ -328,6 +359,7 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
     })?;
     bar.finish_and_clear();
     let pose: Vec<f64> = errs.iter().map(|e| e.pose_degrees).collect();
+    let network: Vec<f64> = errs.iter().map(|e| e.network_pose_degrees).collect();
     let light: Vec<f64> = errs.iter().map(|e| e.light_degrees).collect();
     let optimum: Vec<f64> = errs.iter().map(|e| e.light_optimum_degrees).collect();
     let exact: Vec<f64> = errs.iter().map(|e| e.light_exact_degrees).collect();
@@ -344,7 +376,7 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
     let off: Vec<&invert::InvertError> = errs.iter().filter(|e| e.pose_degrees > 10.0).collect();
     let search_failures = off.iter().filter(|e| e.truth_mse < e.search_mse).count();
     if a.json {
-        let j = serde_json::json!({
+        let mut j = serde_json::json!({
             "samples": errs.len(),
             "light_network": a.light_network,
             "pose_error_median_degrees": median(&pose),
@@ -362,10 +394,14 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
             "pose_off_by_10_degrees": off.len(), "pose_off_search_failures": search_failures,
             "seconds_per_image": secs.mean,
             "per_sample": errs.iter().map(|e| serde_json::json!({
-                "shape": e.shape_id, "pose_degrees": e.pose_degrees, "light_degrees": e.light_degrees, "search_light_degrees": e.search_light_degrees,
+                "shape": e.shape_id, "pose_degrees": e.pose_degrees, "network_pose_degrees": e.network_pose_degrees, "light_degrees": e.light_degrees, "search_light_degrees": e.search_light_degrees,
                 "light_optimum_degrees": e.light_optimum_degrees, "light_exact_degrees": e.light_exact_degrees, "light_exact_truth_degrees": e.light_exact_truth_degrees, "light_in_front": e.light_in_front, "radius_ratio": e.radius_ratio, "mse": e.mse,
                 "truth_mse": e.truth_mse, "search_mse": e.search_mse, "seconds": e.seconds})).collect::<Vec<_>>(),
         });
+        j["pick"] = format!("{:?}", a.pick).to_lowercase().into();
+        j["network_pose_error_median_degrees"] = median(&network).into();
+        j["network_pose_within_5_degrees"] = within(&network, 5.0).into();
+        j["network_pose_within_10_degrees"] = within(&network, 10.0).into();
         println!("{}", serde_json::to_string_pretty(&j).map_err(|e| Error::Invalid(e.to_string()))?);
         return Ok(());
     }
@@ -374,6 +410,12 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
     println!(
         "camera direction error: median {:.1} deg, mean {:.1} ± {:.1} (95%), within 5 deg {:.0}%, within 10 deg {:.0}%",
         median(&pose), iv.mean, iv.ci95, 100.0 * within(&pose, 5.0), 100.0 * within(&pose, 10.0)
+    );
+    println!(
+        "  the network's own pick (--pick network): median {:.1} deg, within 5 deg {:.0}%, within 10 deg {:.0}%",
+        median(&network),
+        100.0 * within(&network, 5.0),
+        100.0 * within(&network, 10.0)
     );
     println!("light direction error: median {:.1} deg, within 10 deg {:.0}%", median(&light), 100.0 * within(&light, 10.0));
     if a.light_network != "none" {

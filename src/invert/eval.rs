@@ -31,6 +31,9 @@ pub struct InvertError {
     pub shape_id: u32,
     /// Angle between the true and recovered camera directions, degrees.
     pub pose_degrees: f64,
+    /// The same for the camera the network's own image MSE picked (`Estimate::network_view`):
+    /// equal to `pose_degrees` with [`super::Pick::Network`].
+    pub network_pose_degrees: f64,
     /// Angle between the true and recovered light directions, degrees.
     pub light_degrees: f64,
     /// The same for the searching network's own light (`Estimate::search_light`): equal to
@@ -109,6 +112,7 @@ pub fn evaluate(
         out.push(InvertError {
             shape_id: s.shape_id,
             pose_degrees: angle_between(view_direction(&s.view), view_direction(&est.view)),
+            network_pose_degrees: angle_between(view_direction(&s.view), view_direction(&est.network_view)),
             light_degrees: light_off(&est.light),
             search_light_degrees: light_off(&est.search_light),
             light_optimum_degrees: light_off(&optimum),

@@ -5,7 +5,7 @@
 //! one render per view. Here too: the light search itself (`Inverter::ranked_lights`,
 //! `Inverter::light_optimum`).
 
-use super::starts::{POLISH_STEP_DEGREES, light_grid};
+use super::starts::{POLISH_STEP_DEGREES, light_grid, light_starts};
 use super::{Inverter, Vars, Window};
 use crate::error::Result;
 use crate::gpu::Gpu;
@@ -107,6 +107,22 @@ impl Inverter {
     /// find it either: a light behind the object leaves the camera only ambient and rims, and
     /// the shading of a grid's stair-stepped normals misleads as the network's errors do.
     pub fn light_exact(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, view: &View) -> Result<Light> {
+        Ok(self.exact_fit(gpu, grid, target, view, &light_grid(POLISH_STEP_DEGREES))?.1)
+    }
+
+    /// How well the exact renderer's maps of `grid` explain `target` from each of `views`:
+    /// the summed squared error over the window around `target`'s foreground under the best
+    /// light of the 20-degree grid (162 directions relative to the camera, the network's
+    /// material constants), lowest best. What [`super::Pick::Exact`] ranks the search's
+    /// hypotheses by.
+    pub fn exact_scores(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, views: &[View]) -> Result<Vec<f64>> {
+        let lights = light_starts();
+        views.iter().map(|v| Ok(self.exact_fit(gpu, grid, target, v, &lights)?.0)).collect()
+    }
+
+    /// The best of `lights` (azimuth, elevation) for the exact renderer's maps of `grid` seen
+    /// from `view`, with its summed squared error against `target` over the window.
+    fn exact_fit(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, view: &View, lights: &[(f64, f64)]) -> Result<(f64, Light)> {
         let (win, t) = self.window(target)?;
         // Two sub-pixels per axis: the datasets' targets average at least that many.
         let rm = RayMarcher::new(gpu).with_options(Options { supersample: 2, ..Options::default() });
@@ -114,15 +130,15 @@ impl Inverter {
         let [normal, albedo, mask] = [0, 1, 2].map(|k| win.crop_rgb(&drawn[k]));
         let maps = Maps::of(&normal, &albedo, &mask, mask.len(), 0);
         let ph = phong_of(&self.head_light);
-        let best = light_grid(POLISH_STEP_DEGREES)
-            .into_iter()
-            .map(|(azimuth, elevation)| {
+        let best = lights
+            .iter()
+            .map(|&(azimuth, elevation)| {
                 let l = Light { azimuth, elevation, ..self.head_light };
                 (maps.sse(&ph, &camera::light_values(&l), &t), l)
             })
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .expect("the light grid is not empty");
-        Ok(best.1)
+        Ok(best)
     }
 
     /// Each of `starts` with each light of `lights` (azimuth, elevation), ranked by how well

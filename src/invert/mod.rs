@@ -12,15 +12,21 @@
 //! one batch, by Adam on
 //! `(azimuth, elevation, ln radius, light azimuth, light elevation)` with the image MSE as
 //! loss; gradients reach the pose through the resampling op and the light through the Phong
-//! op. The start with the lowest final MSE wins.
+//! op. The start with the lowest final MSE wins ([`Pick::Network`]), or, by default
+//! ([`Pick::Exact`]), the hypothesis whose exact render of the known grid explains the image
+//! best.
 
 mod code;
 mod eval;
 mod light;
+mod pick;
+mod window;
+use window::Window;
 mod shape;
 mod texture;
 mod starts;
 pub use texture::{TextureError, TextureEstimate, TextureOptions, evaluate_textures, texture_starts};
+pub use pick::Pick;
 pub use eval::{InvertError, angle_between, evaluate, light_direction, view_direction};
 use eval::phong_target;
 pub use shape::{JointEstimate, PoseSource, ShapeError, ShapeEstimate, ShapeOptions, ShapeView, decode_codes, evaluate_shapes};
@@ -49,6 +55,8 @@ pub struct InvertOptions {
     pub steps: usize,
     /// Initial step of Adam for the angles, degrees (the log-radius step is this / 100).
     pub lr_degrees: f64,
+    /// What picks the camera among the refined hypotheses.
+    pub pick: Pick,
 }
 
 impl Default for InvertOptions {
@@ -56,7 +64,7 @@ impl Default for InvertOptions {
         // 12 x 5 rather than 24 x 10: the finer grid put 90% of 30 unseen chairs within 10
         // degrees instead of 80%, but 59% of the 27 real meshes instead of 67%, for 1.35x
         // the time on lavapipe (README, "Inverse rendering"); `--azimuths 24 --elevations 10`.
-        InvertOptions { azimuths: 12, elevations: 5, keep: 4, steps: 60, lr_degrees: 3.0 }
+        InvertOptions { azimuths: 12, elevations: 5, keep: 4, steps: 60, lr_degrees: 3.0, pick: Pick::Exact }
     }
 }
 
@@ -70,6 +78,9 @@ pub struct Estimate {
     /// The searching network's own light, before a light network picked `light`
     /// ([`Inverter::with_light_network`]; without one, `light`).
     pub search_light: Light,
+    /// The camera the network's own image MSE picked ([`Pick::Network`]); with
+    /// [`Pick::Exact`] the exact maps may have picked another (`view`).
+    pub network_view: View,
     /// Image MSE of the network's render at the estimate against the input (the light
     /// network's, when there is one: [`Inverter::with_light_network`]).
     pub mse: f64,
@@ -82,6 +93,11 @@ pub struct Estimate {
 
 /// Radii the search keeps to (the training set's range, with margin).
 const RADIUS: (f64, f64) = (2.0, 9.0);
+/// Views of the search's ranking (before subdivision) that [`Pick::Exact`] scores beside the
+/// refined hypotheses, with their twins: 24 found one more real mesh than the subdivided 8
+/// alone; scoring all of them (about 40) gave the same cameras for more time (README, "The
+/// exact renderer picks the camera").
+const EXACT_UNREFINED: usize = 24;
 /// Radius of the coarse silhouette pass, mid-range of the training views.
 const COARSE_RADIUS: f64 = 4.65;
 
@@ -301,13 +317,18 @@ impl Inverter {
         // from its nearest start, far enough for a wrong view to score better. Around each of
         // the best 2 * keep views, the 8 views half a step away are ranked the same way and
         // the best of the 9 stands for it.
+        // The best views before subdivision are hypotheses for the exact pick too: on the real
+        // meshes they found a camera the refined starts had missed (README "The exact
+        // renderer picks the camera").
+        let coarse: Vec<Vars> = pool.iter().take(EXACT_UNREFINED).map(|p| p.1).collect();
         pool.truncate(2 * o.keep);
         let (daz, del) = (180.0 / o.azimuths as f64, 90.0 / o.elevations as f64);
         let around: Vec<Vars> = pool.iter().flat_map(|p| neighbours(p.1, daz, del)).collect();
         let ranked = self.ranked_lights(gpu, &mut sil, &gv, &target_crop, &around, &win, &light_starts())?;
         best_of_neighbours(&mut pool, &ranked);
+        let pool_views: Vec<Vars> = pool.iter().map(|p| p.1).chain(coarse).collect();
         let mut vars: Vec<Vars> = pool.into_iter().take(o.keep).map(|p| p.1).collect();
-        let (mut best, mut curve) = self.refine(gpu, &gv, &target_crop, &mut vars, o, &mut progress, &win)?;
+        let (mut best, mut curve, mut candidates) = self.refine_each(gpu, &gv, &target_crop, &mut vars, o, &mut progress, &win)?;
         // Light polish: Adam from the 12 light starts can settle in a local minimum tens of
         // degrees from the network's own optimum (measured: 51.6 degrees off on a chair
         // whose optimum at the true camera is 1.9 degrees off). So the light is searched
@@ -315,12 +336,18 @@ impl Inverter {
         // camera and light refined once more from the best POLISHED lights of that grid at
         // least 30 degrees apart (the network's light optimum is shallow: several far-apart
         // lights score alike); the lower MSE wins.
-        let (again, tail) = self.polish(gpu, &mut sil, &gv, &target_crop, best, o, &win)?;
+        let (again, tail, polished) = self.polish(gpu, &mut sil, &gv, &target_crop, best, o, &win)?;
         let last = *curve.last().expect("at least one step");
         if tail.last().is_some_and(|&m| m < last) {
             best = again;
         }
         curve.extend(tail.into_iter().map(|m| m.min(last)));
+        candidates.extend(polished);
+        let network_view = best.view();
+        if o.pick == Pick::Exact {
+            let refined: Vec<Vars> = std::iter::once(best).chain(candidates.iter().map(|c| c.1)).collect();
+            best = self.exact_pick(gpu, grid, target, &refined, &pool_views, &mut sil, (&gv, &target_crop, &win), o)?;
+        }
         // A light network then picks the light at that camera, its best of the polish grid
         // (README "Inverse rendering": with tiny searching and base picking, closer to the
         // truth on 11 of 16 unseen chairs, on 4 of 12 real meshes).
@@ -339,18 +366,18 @@ impl Inverter {
         ex.forward(gpu)?;
         let img: Vec<f32> = ex.read(gpu, net.image)?.into_iter().map(|x| x.clamp(0.0, 1.0)).collect();
         let mse = img.iter().zip(&target.data).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / img.len() as f64;
-        Ok(Estimate { view: best.view(), light: best.light(&by.head_light), search_light, mse, curve, image: Image { channels: 3, size: by.size, data: img } })
+        Ok(Estimate { view: best.view(), light: best.light(&by.head_light), search_light, network_view, mse, curve, image: Image { channels: 3, size: by.size, data: img } })
     }
 
     /// The light polish from camera and light `best`: every light of the polish grid scored
     /// at that camera, then camera and light refined from the best [`POLISHED`] of them at
     /// least 30 degrees apart (`o.steps / 2` steps); the refinement's best and its curve.
     #[allow(clippy::too_many_arguments)]
-    fn polish(&self, gpu: &Gpu, sil: &mut (RenderNet, Executor), gv: &[f32], target: &[f32], best: Vars, o: &InvertOptions, win: &Window) -> Result<(Vars, Vec<f64>)> {
+    fn polish(&self, gpu: &Gpu, sil: &mut (RenderNet, Executor), gv: &[f32], target: &[f32], best: Vars, o: &InvertOptions, win: &Window) -> Result<(Vars, Vec<f64>, Vec<(f64, Vars)>)> {
         let grid_lights = self.ranked_lights(gpu, sil, gv, target, &[best], win, &light_grid(POLISH_STEP_DEGREES))?.remove(0);
         let mut relit = distinct_lights(grid_lights.into_iter().map(|r| r.1), POLISHED);
         let polish = InvertOptions { steps: o.steps / 2, ..o.clone() };
-        self.refine(gpu, gv, target, &mut relit, &polish, &mut |_, _| {}, win)
+        self.refine_each(gpu, gv, target, &mut relit, &polish, &mut |_, _| {}, win)
     }
 
     /// The image MSE over the window around `target`'s foreground (clamped, as
@@ -407,7 +434,15 @@ impl Inverter {
     /// there, `target`); returns the best start and the best MSE after each step.
     #[allow(clippy::too_many_arguments)]
     fn refine(&self, gpu: &Gpu, gv: &[f32], target: &[f32], vars: &mut [Vars], o: &InvertOptions, progress: &mut impl FnMut(usize, f64), win: &Window) -> Result<(Vars, Vec<f64>)> {
+        let (best, curve, _) = self.refine_each(gpu, gv, target, vars, o, progress, win)?;
+        Ok((best, curve))
+    }
+
+    /// [`Inverter::refine`], also returning each start's best (MSE, unknowns) over its steps.
+    #[allow(clippy::too_many_arguments)]
+    fn refine_each(&self, gpu: &Gpu, gv: &[f32], target: &[f32], vars: &mut [Vars], o: &InvertOptions, progress: &mut impl FnMut(usize, f64), win: &Window) -> Result<(Vars, Vec<f64>, Vec<(f64, Vars)>)> {
         let n = vars.len();
+        let mut each: Vec<(f64, Vars)> = vars.iter().map(|v| (f64::INFINITY, *v)).collect();
         let mut d = Descent::new(self, gpu, target, n, win)?;
         let (mut m, mut v) = (vec![[0.0f64; 5]; n], vec![[0.0f64; 5]; n]);
         let (b1, b2) = (0.9f64, 0.999f64);
@@ -420,6 +455,9 @@ impl Inverter {
                 let mse = y.iter().zip(target).map(|(a, b)| ((a.clamp(0.0, 1.0) - b) as f64).powi(2)).sum::<f64>() / target.len() as f64;
                 if best.is_none_or(|b| mse < b.0) {
                     best = Some((mse, vars[k]));
+                }
+                if mse < each[k].0 {
+                    each[k] = (mse, vars[k]);
                 }
             }
             let b = best.expect("at least one start").0;
@@ -443,81 +481,7 @@ impl Inverter {
                 vars[k].clamp();
             }
         }
-        Ok((best.expect("at least one start").1, curve))
-    }
-}
-
-/// The part of the camera grid a search renders: the target's foreground box grown by
-/// [`WINDOW_MARGIN`] camera voxels, sides rounded up to multiples of 4 (what the strides
-/// need) and clamped to the grid. Empty space costs nothing: a bunny at radius 3.3 needs
-/// about a third of the frame, a chair at radius 6 a tenth. Depth stays whole.
-#[derive(Clone, Copy, Debug)]
-struct Window {
-    /// `[h0, w0, h, w]` in camera voxels (as `nn::camera::pose_for_view` takes it).
-    cam: [usize; 4],
-    /// Image pixels per camera voxel.
-    f: usize,
-}
-
-/// Camera voxels of context kept around the foreground: silhouettes of nearby wrong poses
-/// still fall inside, and the network's border effects stay off the object.
-const WINDOW_MARGIN: usize = 6;
-
-impl Window {
-    fn full(p: &Preset, size: usize) -> Window {
-        Window { cam: [0, 0, p.cam, p.cam], f: size / p.cam }
-    }
-
-    fn around(p: &Preset, fg: &[bool], size: usize) -> Window {
-        let f = size / p.cam;
-        let (mut lo, mut hi) = ([usize::MAX; 2], [0usize; 2]);
-        for i in (0..fg.len()).filter(|&i| fg[i]) {
-            let c = [i / size / f, i % size / f];
-            for a in 0..2 {
-                lo[a] = lo[a].min(c[a]);
-                hi[a] = hi[a].max(c[a]);
-            }
-        }
-        if lo[0] == usize::MAX {
-            return Window::full(p, size);
-        }
-        let mut cam = [0; 4];
-        for a in 0..2 {
-            let len = (hi[a] - lo[a] + 1 + 2 * WINDOW_MARGIN).next_multiple_of(4).min(p.cam);
-            let centre = (lo[a] + hi[a] + 1) / 2;
-            cam[a] = centre.saturating_sub(len / 2).min(p.cam - len);
-            cam[2 + a] = len;
-        }
-        Window { cam, f }
-    }
-
-    /// The window of the same centre `len` camera voxels across (at most the camera's), so
-    /// that windows of several images share one network size.
-    fn resized(&self, p: &Preset, len: [usize; 2]) -> Window {
-        let mut cam = self.cam;
-        for a in 0..2 {
-            let l = len[a].min(p.cam);
-            let centre = self.cam[a] + self.cam[2 + a] / 2;
-            cam[a] = centre.saturating_sub(l / 2).min(p.cam - l);
-            cam[2 + a] = l;
-        }
-        Window { cam, f: self.f }
-    }
-
-    /// `[rows, columns]` of image pixels inside.
-    fn pixel_dims(&self) -> [usize; 2] {
-        [self.cam[2] * self.f, self.cam[3] * self.f]
-    }
-
-    fn crop_rgb(&self, img: &Image) -> Vec<f32> {
-        let [h, w] = self.pixel_dims();
-        crate::train::batch::crop(img, self.cam[0] * self.f, self.cam[1] * self.f, h, w)
-    }
-
-    fn crop_mask(&self, fg: &[bool], size: usize) -> Vec<bool> {
-        let [h, w] = self.pixel_dims();
-        let (y0, x0) = (self.cam[0] * self.f, self.cam[1] * self.f);
-        (0..h).flat_map(|y| (0..w).map(move |x| fg[(y0 + y) * size + x0 + x])).collect()
+        Ok((best.expect("at least one start").1, curve, each))
     }
 }
 

@@ -171,6 +171,9 @@ impl Inverter {
         let mean = CodeStats::from_weights(prior_weights, "prior")?.map_or_else(|| vec![0.5; prior.latent], |s| s.mean);
         let mut grid = decode_codes(gpu, prior, prior_weights, &mean)?.remove(0);
         let rounds = rounds.max(1);
+        // The exact renderer would draw the prior's guess, not the shape in the image: the
+        // network picks (Pick::Exact is unmeasured here).
+        let po = &super::InvertOptions { pick: super::Pick::Network, ..po.clone() };
         let mut last = None;
         for r in 0..rounds {
             let pose = self.invert(gpu, &grid, target, po, |_, _| {})?;

@@ -46,9 +46,7 @@ pub(super) fn with_twins(ranked: impl Iterator<Item = Vars>, keep: usize) -> Vec
     let mut out: Vec<Vars> = Vec::new();
     let near = |a: &Vars, b: &Vars| within_30_degrees((a.0[0], a.0[1]), (b.0[0], b.0[1]));
     for v in ranked {
-        let mut twin = v;
-        twin.0[0] = (v.0[0] + 180.0) % 360.0;
-        for c in [v, twin] {
+        for c in [v, twin(v)] {
             if out.len() < keep && !out.iter().any(|k| near(k, &c)) {
                 out.push(c);
             }
@@ -58,6 +56,14 @@ pub(super) fn with_twins(ranked: impl Iterator<Item = Vars>, keep: usize) -> Vec
         }
     }
     out
+}
+
+/// `v` seen from the opposite side: azimuth + 180 degrees, elevation, radius and light (relative
+/// to the camera) kept. A left-right symmetric shape's silhouettes from the two coincide.
+pub(super) fn twin(v: Vars) -> Vars {
+    let mut t = v;
+    t.0[0] = (v.0[0] + 180.0) % 360.0;
+    t
 }
 
 /// The 8 views around `v` half a coarse grid step away (`daz` azimuth, `del` elevation,
