@@ -16,14 +16,15 @@ use crate::voxel::VoxelGrid;
 pub enum Pick {
     /// The network's own image MSE (the paper's inverse rendering: nothing but the network).
     Network,
-    /// The exact renderer's maps of the known grid ([`Inverter::exact_fit`]): every refined
-    /// start, the subdivided views the refinement did not take and the opposite-side twins of
-    /// all of them are drawn by the ray marcher (normal, albedo, mask), each lit by its best
-    /// light of the 20-degree grid; the lowest image MSE wins, and a pick the network did not
-    /// refine is refined and kept so if the exact maps still prefer it. The network proposes
-    /// and refines, the grid itself arbitrates: a network's render from the wrong side can
-    /// explain an image better than its render from the right one (README "Inverse
-    /// rendering", "The exact renderer picks the camera").
+    /// The exact renderer's maps of the known grid ([`Inverter::exact_scores`]): the refined
+    /// starts (the refinement's and the light polish's), the subdivided views, the best views
+    /// of the ranking before subdivision and the opposite-side twins of all of them are drawn
+    /// by the ray marcher (normal, albedo, mask), each lit by its best light of the 20-degree
+    /// grid; the lowest image MSE wins, and at a camera other than the network's own pick the
+    /// light polish runs again. The network proposes and refines, the grid itself
+    /// arbitrates: a network's render from the wrong side can explain an image better than
+    /// its render from the right one (README "Inverse rendering", "The exact renderer picks
+    /// the camera").
     Exact,
 }
 
