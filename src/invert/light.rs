@@ -5,7 +5,7 @@
 //! one render per view. Here too: the light search itself (`Inverter::ranked_lights`,
 //! `Inverter::light_optimum`).
 
-use super::starts::{POLISH_STEP_DEGREES, light_grid, light_starts};
+use super::starts::{POLISH_STEP_DEGREES, light_grid};
 use super::{Inverter, Vars, Window};
 use crate::error::Result;
 use crate::gpu::Gpu;
@@ -13,7 +13,7 @@ use crate::graph::Executor;
 use crate::nn::camera;
 use crate::nn::rendernet::{RenderNet, phong_of};
 use crate::ops::phong::Phong;
-use crate::reference::{Image, Light, Options, RayMarcher, Shader, View};
+use crate::reference::{Image, Light, View};
 use crate::voxel::VoxelGrid;
 
 /// One start's light-independent maps over the search window.
@@ -23,6 +23,15 @@ pub(super) struct Maps {
     /// Albedo, grey broadcast to three channels.
     albedo: Vec<[f32; 3]>,
     mask: Vec<f32>,
+    /// Map pixels per image pixel along each axis: each is shaded, then the `sub x sub`
+    /// block averaged, as a supersampled reference image is drawn.
+    sub: usize,
+    /// Image pixels per row (with `sub > 1`).
+    width: usize,
+    /// Cut the highlight where the light is behind the surface (`n.l <= 0`), as the
+    /// reference renderer does. The Phong op (so the network's image) keeps it there: the
+    /// networks were trained with that op.
+    cut: bool,
 }
 
 impl Maps {
@@ -39,7 +48,13 @@ impl Maps {
             })
             .collect();
         let albedo = (0..hw).map(|px| if c == 3 { [ab[px], ab[hw + px], ab[2 * hw + px]] } else { [ab[px]; 3] }).collect();
-        Maps { normal, albedo, mask: mask[b * hw..(b + 1) * hw].to_vec() }
+        Maps { normal, albedo, mask: mask[b * hw..(b + 1) * hw].to_vec(), sub: 1, width: 0, cut: false }
+    }
+
+    /// The exact renderer's maps (normal `[3, H, W]`, albedo `[C, H, W]`, mask `[H, W]`,
+    /// `sub` times the target's `width` across), shaded as the reference renderer shades.
+    pub(super) fn exact(normal: &[f32], albedo: &[f32], mask: &[f32], sub: usize, width: usize) -> Maps {
+        Maps { sub, width, cut: true, ..Maps::of(normal, albedo, mask, mask.len(), 0) }
     }
 
     /// The image `[3, H, W]` these maps give under `light` (`nn::camera::light_values`:
@@ -60,12 +75,22 @@ impl Maps {
     /// Summed squared error against `target` (`[3, H, W]`) of the image under `light`,
     /// clamped to [0, 1] as a user sees it.
     pub(super) fn sse(&self, ph: &Phong, light: &[f32; 6], target: &[f32]) -> f64 {
-        let hw = self.mask.len();
+        let hw = target.len() / 3;
+        let (k, w) = (self.sub, self.width.max(1));
         let mut sum = 0.0;
         for px in 0..hw {
-            let v = self.pixel(ph, light, px);
+            let (y, x) = (px / w, px % w);
+            let mut v = [0.0f32; 3];
+            for dy in 0..k {
+                for dx in 0..k {
+                    let s = self.pixel(ph, light, (y * k + dy) * w * k + x * k + dx);
+                    for c in 0..3 {
+                        v[c] += s[c].clamp(0.0, 1.0);
+                    }
+                }
+            }
             for c in 0..3 {
-                sum += ((v[c].clamp(0.0, 1.0) - target[c * hw + px]) as f64).powi(2);
+                sum += ((v[c] / (k * k) as f32 - target[c * hw + px]) as f64).powi(2);
             }
         }
         sum
@@ -75,7 +100,7 @@ impl Maps {
         let (n, a, m) = (self.normal[px], self.albedo[px], self.mask[px]);
         let d = n[0] * light[0] + n[1] * light[1] + n[2] * light[2];
         let s = 2.0 * d * n[2] - light[2];
-        let spec = if s > 0.0 { s.powf(ph.shininess) } else { 0.0 };
+        let spec = if s > 0.0 && (d > 0.0 || !self.cut) { s.powf(ph.shininess) } else { 0.0 };
         let diffuse = ph.ambient + ph.kd * d.max(0.0);
         [0, 1, 2].map(|c| m * light[3 + c] * (a[c] * diffuse + ph.ks * spec))
     }
@@ -97,48 +122,6 @@ impl Inverter {
         let ranked = self.ranked_lights(gpu, &mut (net, ex), &gv, &t, &[start], &win, &light_grid(POLISH_STEP_DEGREES))?;
         let (sse, best) = ranked[0][0];
         Ok((best.light(&self.head_light), sse / t.len() as f64))
-    }
-
-    /// The light, among every direction of the 5-degree grid, under which the exact
-    /// renderer's own maps of `grid` seen from `view` (normal, albedo and mask from
-    /// [`RayMarcher`], shaded as the searches shade the network's maps) best match `target`
-    /// over the search window: what the grid and the image alone say about the light, with
-    /// no network in the way. Far from the true light, no network reading this grid could
-    /// find it either: a light behind the object leaves the camera only ambient and rims, and
-    /// the shading of a grid's stair-stepped normals misleads as the network's errors do.
-    pub fn light_exact(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, view: &View) -> Result<Light> {
-        Ok(self.exact_fit(gpu, grid, target, view, &light_grid(POLISH_STEP_DEGREES))?.1)
-    }
-
-    /// How well the exact renderer's maps of `grid` explain `target` from each of `views`:
-    /// the summed squared error over the window around `target`'s foreground under the best
-    /// light of the 20-degree grid (162 directions relative to the camera, the network's
-    /// material constants), lowest best. What [`super::Pick::Exact`] ranks the search's
-    /// hypotheses by.
-    pub fn exact_scores(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, views: &[View]) -> Result<Vec<f64>> {
-        let lights = light_starts();
-        views.iter().map(|v| Ok(self.exact_fit(gpu, grid, target, v, &lights)?.0)).collect()
-    }
-
-    /// The best of `lights` (azimuth, elevation) for the exact renderer's maps of `grid` seen
-    /// from `view`, with its summed squared error against `target` over the window.
-    fn exact_fit(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, view: &View, lights: &[(f64, f64)]) -> Result<(f64, Light)> {
-        let (win, t) = self.window(target)?;
-        // Two sub-pixels per axis: the datasets' targets average at least that many.
-        let rm = RayMarcher::new(gpu).with_options(Options { supersample: 2, ..Options::default() });
-        let drawn = rm.render_many(gpu, grid, view, &self.head_light, &[Shader::Normal, Shader::Albedo, Shader::Mask], self.size as u32)?;
-        let [normal, albedo, mask] = [0, 1, 2].map(|k| win.crop_rgb(&drawn[k]));
-        let maps = Maps::of(&normal, &albedo, &mask, mask.len(), 0);
-        let ph = phong_of(&self.head_light);
-        let best = lights
-            .iter()
-            .map(|&(azimuth, elevation)| {
-                let l = Light { azimuth, elevation, ..self.head_light };
-                (maps.sse(&ph, &camera::light_values(&l), &t), l)
-            })
-            .min_by(|a, b| a.0.total_cmp(&b.0))
-            .expect("the light grid is not empty");
-        Ok(best)
     }
 
     /// Each of `starts` with each light of `lights` (azimuth, elevation), ranked by how well
@@ -214,6 +197,24 @@ mod tests {
         }
     }
 
+    /// The exact maps shade as the reference renderer: a normal 80 degrees from the camera
+    /// under a light straight behind the object faces away from it (n.l < 0) though its
+    /// mirror direction points at the camera (r.v > 0), so the reference draws ambient only
+    /// there, while the network's maps (the Phong op) keep the highlight (`0.3 * 0.94^20`).
+    #[test]
+    fn exact_maps_cut_the_highlight_where_the_light_is_behind_the_surface() {
+        let a = 80f32.to_radians();
+        let normal = [0.5 * (a.sin() + 1.0), 0.5, 0.5 * (a.cos() + 1.0)];
+        let ph = phong_of(&Light::default());
+        let behind = [0.0, 0.0, -1.0, 1.0, 1.0, 1.0];
+        let exact = Maps::exact(&normal, &[0.8], &[1.0], 1, 1).shade(&ph, &behind);
+        for c in exact {
+            assert!((c - 0.8 * ph.ambient).abs() < 1e-6, "exact maps draw {c}, not the ambient term alone");
+        }
+        let network = Maps::of(&normal, &[0.8], &[1.0], 1, 0).shade(&ph, &behind);
+        assert!(network[0] > 0.8 * ph.ambient + 0.05, "the network's maps lost the Phong op's highlight: {}", network[0]);
+    }
+
     /// Ranking the 20-degree grid's lights at the camera that drew the target puts the grid
     /// light that drew it first (error ~0, the network's own image), every list best first.
     #[test]
@@ -239,25 +240,6 @@ mod tests {
         let best = ranked[1][0];
         assert!(best.0 < 1e-6 && (best.1.0[3], best.1.0[4]) == (140.0, 70.0), "best light {:?} with error {}", best.1, best.0);
         assert!(ranked[0][0].0 > 1.0, "another camera explains the image as well: {}", ranked[0][0].0);
-    }
-
-    /// Fitted to the exact renderer's own maps, the light that drew an exact Phong image of
-    /// the bunny (a 5-degree grid light from the front left, lighting what the camera sees)
-    /// comes back to within one grid step. Same renderer and sub-pixels on both sides, so the
-    /// only difference is averaging normals rather than shaded colours at the silhouette's
-    /// edge pixels.
-    #[test]
-    fn exact_light_of_an_exact_image_is_the_light_that_drew_it() {
-        let gpu = Gpu::new().unwrap();
-        let inv = Inverter::new(Preset::nano(), crate::nn::render::NANO_PHONG_WEIGHTS, "nano", Light::default()).unwrap();
-        let grid = crate::voxel::bunny();
-        let view = View { azimuth: 75.0, elevation: 60.0, radius: 3.5 };
-        let truth = Light { azimuth: 325.0, elevation: 72.5, ..Light::default() };
-        let rm = RayMarcher::new(&gpu).with_options(Options { supersample: 2, ..Options::default() });
-        let target = rm.render(&gpu, &grid, &view, &truth, Shader::Phong, inv.size as u32).unwrap();
-        let l = inv.light_exact(&gpu, &grid, &target, &view).unwrap();
-        let off = super::super::angle_between(super::super::light_direction(&truth), super::super::light_direction(&l));
-        assert!(off < 5.1, "exact light ({}, {}) is {off:.1} degrees from the truth", l.azimuth, l.elevation);
     }
 
     /// The network's own best light at the camera that drew its own image is the light that

@@ -14,10 +14,11 @@
 //! loss; gradients reach the pose through the resampling op and the light through the Phong
 //! op. The start with the lowest final MSE wins ([`Pick::Network`]), or, by default
 //! ([`Pick::Exact`]), the hypothesis whose exact render of the known grid explains the image
-//! best.
+//! best, its camera and light then refined on that exact render (`exact.rs`).
 
 mod code;
 mod eval;
+mod exact;
 mod light;
 mod pick;
 mod window;
@@ -347,6 +348,11 @@ impl Inverter {
         if o.pick == Pick::Exact {
             let refined: Vec<Vars> = std::iter::once(best).chain(candidates.iter().map(|c| c.1)).collect();
             best = self.exact_pick(gpu, grid, target, &refined, &pool_views, &mut sil, (&gv, &target_crop, &win), o)?;
+            // The exact polish: the pick's camera and the light refined on the exact maps
+            // themselves (README "The exact renderer picks the camera").
+            let scene = self.exact_scene(gpu, grid, target, &best.view())?;
+            let (_, v, l) = self.exact_polish(gpu, &scene, &best.view())?;
+            best = Vars([v.azimuth, v.elevation, v.radius.ln(), l.azimuth, l.elevation]);
         }
         // A light network then picks the light at that camera, its best of the polish grid
         // (README "Inverse rendering": with tiny searching and base picking, closer to the

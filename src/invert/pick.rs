@@ -21,10 +21,11 @@ pub enum Pick {
     /// of the ranking before subdivision and the opposite-side twins of all of them are drawn
     /// by the ray marcher (normal, albedo, mask), each lit by its best light of the 20-degree
     /// grid; the lowest image MSE wins, and at a camera other than the network's own pick the
-    /// light polish runs again. The network proposes and refines, the grid itself
-    /// arbitrates: a network's render from the wrong side can explain an image better than
-    /// its render from the right one (README "Inverse rendering", "The exact renderer picks
-    /// the camera").
+    /// light polish runs again. Last, the exact polish (`Inverter::exact_polish`) refines
+    /// camera and light on the exact maps themselves, the grid smoothed as the image prefers.
+    /// The network proposes and refines, the grid itself arbitrates: a network's render from
+    /// the wrong side can explain an image better than its render from the right one (README
+    /// "Inverse rendering", "The exact renderer picks the camera").
     Exact,
 }
 
@@ -42,13 +43,14 @@ impl Inverter {
         let mut all: Vec<Vars> = refined.iter().chain(unrefined).copied().collect();
         all.extend(all.iter().map(|&v| twin(v)).collect::<Vec<_>>());
         let views: Vec<View> = all.iter().map(Vars::view).collect();
-        let scores = self.exact_scores(gpu, grid, target, &views)?;
+        let scene = self.exact_scene(gpu, grid, target, &views[0])?;
+        let scores = self.scores_in(gpu, &scene, &views)?;
         let k = (0..all.len()).min_by(|&a, &b| scores[a].total_cmp(&scores[b])).expect("the network's best is a candidate");
         if k == 0 {
             return Ok(all[0]);
         }
         let (again, _, _) = self.polish(gpu, sil, gv, crop, all[k], o, win)?;
-        if self.exact_scores(gpu, grid, target, &[again.view()])?[0] <= scores[k] {
+        if self.scores_in(gpu, &scene, &[again.view()])?[0] <= scores[k] {
             return Ok(again);
         }
         Ok(self.ranked_lights(gpu, sil, gv, crop, &[all[k]], win, &light_grid(POLISH_STEP_DEGREES))?[0][0].1)

@@ -328,6 +328,31 @@ impl VoxelGrid {
         })
     }
 
+    /// The occupancy blurred once along each axis by the `[1, 2, 1] / 4` kernel (edges
+    /// clamped; colour kept): a binary grid's stair-stepped faces become ramps whose 0.5
+    /// iso-surface stays where the face was but turns smoothly at its edges and corners, as
+    /// a finer grid's would. Thin parts lose density (a one-voxel sheet peaks at 0.5), so
+    /// callers compare the result against the original rather than assume it is better.
+    pub fn smoothed(&self) -> VoxelGrid {
+        let [d, h, w] = self.dims;
+        let strides = [h * w, w, 1];
+        let mut cur = self.occupancy.clone();
+        for axis in 0..3 {
+            let (n, st) = (self.dims[axis], strides[axis]);
+            let next: Vec<f32> = (0..cur.len())
+                .map(|i| {
+                    let k = i / st % n;
+                    let lo = if k > 0 { cur[i - st] } else { cur[i] };
+                    let hi = if k + 1 < n { cur[i + st] } else { cur[i] };
+                    0.25 * lo + 0.5 * cur[i] + 0.25 * hi
+                })
+                .collect();
+            cur = next;
+        }
+        debug_assert_eq!(cur.len(), d * h * w);
+        VoxelGrid { occupancy: cur, ..self.clone() }
+    }
+
     /// Resamples to an `n^3` grid (colour too). Shrinking averages the source voxels each target
     /// voxel covers (box filter, so thin parts fade instead of vanishing); enlarging
     /// interpolates trilinearly between voxel centres with edge clamping. Axes are independent.

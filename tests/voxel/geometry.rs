@@ -217,6 +217,52 @@ fn resampling_preserves_mass_and_range() {
     assert!(g.resample_to(0).is_err());
 }
 
+/// `smoothed` blurs each axis by [1, 2, 1] / 4 with clamped edges: a single voxel spreads
+/// to the product kernel (centre 1/8, face neighbours 1/16, edges 1/32, corners 1/64), its
+/// mass is kept away from the border, a flat face keeps its 0.5 crossing, a full grid stays
+/// full, and the colour is untouched. Non-cubic dims catch a swapped axis stride.
+#[test]
+fn smoothing_spreads_by_the_separable_kernel() {
+    let dims = [5, 6, 7];
+    let mut g = VoxelGrid::zeros(dims).unwrap();
+    g.set(2, 3, 4, 1.0);
+    let s = g.smoothed();
+    assert_eq!(s.dims(), dims);
+    let want = |d: usize, h: usize, w: usize| -> f32 {
+        let k = |a: usize, c: usize| match a.abs_diff(c) {
+            0 => 0.5,
+            1 => 0.25,
+            _ => 0.0,
+        };
+        k(d, 2) * k(h, 3) * k(w, 4)
+    };
+    for d in 0..5 {
+        for h in 0..6 {
+            for w in 0..7 {
+                assert!((s.get(d, h, w) - want(d, h, w)).abs() < 1e-7, "({d}, {h}, {w}): {} against {}", s.get(d, h, w), want(d, h, w));
+            }
+        }
+    }
+    assert!((s.occupancy().iter().sum::<f32>() - 1.0).abs() < 1e-6);
+    // A half-filled grid along w: the face between w = 2 and 3 keeps its crossing; the
+    // clamped edges keep the full and the empty ends at 1 and 0.
+    let mut half = VoxelGrid::zeros(dims).unwrap();
+    for d in 0..5 {
+        for h in 0..6 {
+            for w in 0..3 {
+                half.set(d, h, w, 1.0);
+            }
+        }
+    }
+    let s = half.smoothed();
+    let row: Vec<f32> = (0..7).map(|w| s.get(1, 5, w)).collect();
+    assert_eq!(row, vec![1.0, 1.0, 0.75, 0.25, 0.0, 0.0, 0.0]);
+    let full = VoxelGrid::new(dims, vec![1.0; 210]).unwrap().with_colour(vec![0.3; 630]).unwrap();
+    let s = full.smoothed();
+    assert!(s.occupancy().iter().all(|&v| (v - 1.0).abs() < 1e-6));
+    assert_eq!(s.colour(), full.colour());
+}
+
 #[test]
 fn procedural_shapes_are_deterministic_and_varied() {
     assert_eq!(shapes::chair(7), shapes::chair(7));
