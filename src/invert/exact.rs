@@ -165,25 +165,35 @@ fn lights_around(l: &Light, step: f64, span: f64) -> Vec<(f64, f64)> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::{angle_between, light_direction, view_direction};
     use super::*;
     use crate::nn::rendernet::Preset;
 
+    /// The bunny's camera in these tests.
+    const VIEW: View = View { azimuth: 75.0, elevation: 60.0, radius: 3.5 };
+
+    /// The nano inverter and the bunny, with an exact Phong image of it from [`VIEW`] under
+    /// `light` (2 x 2 sub-pixels, as `dataset` draws its targets).
+    fn bunny_under(gpu: &Gpu, light: &Light) -> (Inverter, VoxelGrid, Image) {
+        let inv = Inverter::new(Preset::nano(), crate::nn::render::NANO_PHONG_WEIGHTS, "nano", Light::default()).unwrap();
+        let grid = crate::voxel::bunny();
+        let rm = RayMarcher::new(gpu).with_options(Options { supersample: 2, ..Options::default() });
+        let target = rm.render(gpu, &grid, &VIEW, light, Shader::Phong, inv.size as u32).unwrap();
+        (inv, grid, target)
+    }
+
     /// Fitted to the exact renderer's own maps, the light that drew an exact Phong image of
-    /// the bunny (a 5-degree grid light from the front left, lighting what the camera sees)
-    /// comes back exactly: the maps are drawn and shaded as the image was (2 x 2 sub-pixels
+    /// the bunny (5-degree grid lights: from the front left, and from behind and below) comes
+    /// back exactly: the maps are drawn and shaded as the image was (2 x 2 sub-pixels
     /// shaded, then averaged), so the only difference is f32 rounding, far below the nearest
     /// other light's error.
     #[test]
     fn exact_light_of_an_exact_image_is_the_light_that_drew_it() {
         let gpu = Gpu::new().unwrap();
-        let inv = Inverter::new(Preset::nano(), crate::nn::render::NANO_PHONG_WEIGHTS, "nano", Light::default()).unwrap();
-        let grid = crate::voxel::bunny();
-        let view = View { azimuth: 75.0, elevation: 60.0, radius: 3.5 };
         for truth in [Light { azimuth: 325.0, elevation: 72.5, ..Light::default() }, Light { azimuth: 150.0, elevation: 117.5, ..Light::default() }] {
-            let rm = RayMarcher::new(&gpu).with_options(Options { supersample: 2, ..Options::default() });
-            let target = rm.render(&gpu, &grid, &view, &truth, Shader::Phong, inv.size as u32).unwrap();
-            let l = inv.light_exact(&gpu, &grid, &target, &view).unwrap();
-            let off = super::super::angle_between(super::super::light_direction(&truth), super::super::light_direction(&l));
+            let (inv, grid, target) = bunny_under(&gpu, &truth);
+            let l = inv.light_exact(&gpu, &grid, &target, &VIEW).unwrap();
+            let off = angle_between(light_direction(&truth), light_direction(&l));
             assert!(off < 0.01, "exact light ({}, {}) is {off:.2} degrees from the truth ({}, {})", l.azimuth, l.elevation, truth.azimuth, truth.elevation);
         }
     }
@@ -193,19 +203,15 @@ mod tests {
     #[test]
     fn exact_polish_returns_to_the_camera_that_drew_the_image() {
         let gpu = Gpu::new().unwrap();
-        let inv = Inverter::new(Preset::nano(), crate::nn::render::NANO_PHONG_WEIGHTS, "nano", Light::default()).unwrap();
-        let grid = crate::voxel::bunny();
-        let view = View { azimuth: 75.0, elevation: 60.0, radius: 3.5 };
         let truth = Light { azimuth: 325.0, elevation: 72.5, ..Light::default() };
-        let rm = RayMarcher::new(&gpu).with_options(Options { supersample: 2, ..Options::default() });
-        let target = rm.render(&gpu, &grid, &view, &truth, Shader::Phong, inv.size as u32).unwrap();
+        let (inv, grid, target) = bunny_under(&gpu, &truth);
         let start = View { azimuth: 78.0, elevation: 62.0, radius: 3.5 * 1.04 };
         let scene = inv.exact_scene(&gpu, &grid, &target, &start).unwrap();
         let (e, v, l) = inv.exact_polish(&gpu, &scene, &start).unwrap();
         let start_score = inv.exact_fit(&gpu, &scene, &start, &light_grid(POLISH_STEP_DEGREES)).unwrap().0;
         assert!(e <= start_score, "polished {e} above the start's {start_score}");
-        let cam_off = super::super::angle_between(super::super::view_direction(&view), super::super::view_direction(&v));
-        let light_off = super::super::angle_between(super::super::light_direction(&truth), super::super::light_direction(&l));
-        assert!(cam_off < 0.5 && light_off < 1.0 && (v.radius / view.radius - 1.0).abs() < 0.01, "camera {v:?} ({cam_off:.2} deg off), light {light_off:.2} deg off, score {e}");
+        let cam_off = angle_between(view_direction(&VIEW), view_direction(&v));
+        let light_off = angle_between(light_direction(&truth), light_direction(&l));
+        assert!(cam_off < 0.5 && light_off < 1.0 && (v.radius / VIEW.radius - 1.0).abs() < 0.01, "camera {v:?} ({cam_off:.2} deg off), light {light_off:.2} deg off, score {e}");
     }
 }
