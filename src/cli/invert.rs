@@ -98,12 +98,14 @@ pub struct InvertArgs {
     /// Shipped Phong network that picks the final light at the recovered camera (its best
     /// light over a 5-degree grid of directions) and draws the estimate: base, whose lights
     /// measured closer to the truth on procedural chairs but not on real meshes (README), or
-    /// none to keep the searching network's own light. Not with --prior or --texture.
+    /// none to keep the search's own light (the exact polish's with --pick exact). Not with
+    /// --prior or --texture.
     #[arg(long, value_name = "PRESET", default_value = "none", value_parser = LIGHT_NETWORKS, conflicts_with_all = ["prior", "texture"])]
     light_network: String,
     /// What picks the camera among the search's hypotheses: exact (default) draws the refined
     /// ones, the best unrefined views and the far-side twins of all with the reference renderer
-    /// from the known grid and keeps the one whose maps explain the image best; network keeps
+    /// from the known grid, keeps the one whose maps explain the image best and refines camera
+    /// and light on those maps (the light reported is theirs); network keeps
     /// the network's own lowest image MSE (the paper's way). With --prior the network picks.
     #[arg(long, value_enum, default_value_t = PickArg::Exact)]
     pick: PickArg,
@@ -308,12 +310,13 @@ pub struct EvalInvertArgs {
     /// Shipped Phong network that picks the final light at the recovered camera (its best
     /// light over a 5-degree grid of directions) and draws the estimate: base, whose lights
     /// measured closer to the truth on procedural chairs but not on real meshes (README), or
-    /// none to keep the searching network's own light.
+    /// none to keep the search's own light (the exact polish's with --pick exact).
     #[arg(long, value_name = "PRESET", default_value = "none", value_parser = LIGHT_NETWORKS)]
     light_network: String,
     /// What picks the camera among the search's hypotheses: exact (default) draws the refined
     /// ones, the best unrefined views and the far-side twins of all with the reference renderer
-    /// from the known grid and keeps the one whose maps explain the image best; network keeps
+    /// from the known grid, keeps the one whose maps explain the image best and refines camera
+    /// and light on those maps (the light reported is theirs); network keeps
     /// the network's own lowest image MSE (the paper's way).
     #[arg(long, value_enum, default_value_t = PickArg::Exact)]
     pick: PickArg,
@@ -420,7 +423,7 @@ pub fn run_eval(a: EvalInvertArgs) -> Result<()> {
     println!("light direction error: median {:.1} deg, within 10 deg {:.0}%", median(&light), 100.0 * within(&light, 10.0));
     if a.light_network != "none" {
         let own: Vec<f64> = errs.iter().map(|e| e.search_light_degrees).collect();
-        println!("  the searching network's own light: median {:.1} deg, within 10 deg {:.0}%", median(&own), 100.0 * within(&own, 10.0));
+        println!("  the search's own light: median {:.1} deg, within 10 deg {:.0}%", median(&own), 100.0 * within(&own, 10.0));
     }
     println!(
         "the light-picking network's own best light at the true camera (5-degree grid): median {:.1} deg from the truth, within 10 deg {:.0}%",

@@ -5,7 +5,7 @@
 //! [`super::Pick::Exact`] search. The maps (normal, albedo, mask) are drawn at [`SUB`] x
 //! [`SUB`] sub-pixels and each sub-pixel is shaded before the block is averaged, with the
 //! highlight cut where the light is behind the surface: how the datasets' targets are drawn.
-//! Averaging normals before shading (session 34) left the light 11.8 degrees off at the
+//! Averaging normals before shading (sessions 33-34) left the light 11.8 degrees off at the
 //! true camera (median, 60 chair views); shading first, 6.7.
 
 use super::light::Maps;

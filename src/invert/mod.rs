@@ -76,8 +76,9 @@ pub struct Estimate {
     pub view: View,
     /// Recovered light (the network's material constants, white).
     pub light: Light,
-    /// The searching network's own light, before a light network picked `light`
-    /// ([`Inverter::with_light_network`]; without one, `light`).
+    /// The search's light, before a light network picked `light`
+    /// ([`Inverter::with_light_network`]; without one, `light`): the exact polish's with
+    /// [`Pick::Exact`], the searching network's own with [`Pick::Network`].
     pub search_light: Light,
     /// The camera the network's own image MSE picked ([`Pick::Network`]); with
     /// [`Pick::Exact`] the exact maps may have picked another (`view`).
@@ -349,7 +350,7 @@ impl Inverter {
             let refined: Vec<Vars> = std::iter::once(best).chain(candidates.iter().map(|c| c.1)).collect();
             best = self.exact_pick(gpu, grid, target, &refined, &pool_views, &mut sil, (&gv, &target_crop, &win), o)?;
             // The exact polish: the pick's camera and the light refined on the exact maps
-            // themselves (README "The exact renderer picks the camera").
+            // themselves (README "The exact polish and the exact light").
             let scene = self.exact_scene(gpu, grid, target, &best.view())?;
             let (_, v, l) = self.exact_polish(gpu, &scene, &best.view())?;
             best = Vars([v.azimuth, v.elevation, v.radius.ln(), l.azimuth, l.elevation]);
