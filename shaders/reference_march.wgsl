@@ -14,10 +14,11 @@ struct Params {
     r00: f32, r01: f32, r02: f32,
     r10: f32, r11: f32, r12: f32,
     r20: f32, r21: f32, r22: f32,
-    fov: f32,       // image width in object units
+    fov: f32,       // width of the part of the image drawn, object units
     unit: f32,      // grid units per object unit (the longest grid side)
     step: f32,      // march step in grid units
     ao_radius: f32, // AO ray length in grid units
+    cu0: f32, cv0: f32, // centre of the part drawn on the camera plane (0, 0 for the whole image)
 }
 @group(0) @binding(0) var<uniform> p: Params;
 @group(0) @binding(1) var<storage, read> occ: array<f32>;
@@ -136,8 +137,8 @@ fn reference_march(@builtin(global_invocation_id) gid: vec3<u32>) {
     let plane = n * n;
     // Pixel centre on the camera plane z = +1 (object units; the unit cube's corners reach
     // sqrt(3)/2 < 1), row 0 at the top.
-    let cu = ((f32(gid.x) + 0.5) / f32(n) - 0.5) * p.fov;
-    let cv = (0.5 - (f32(gid.y) + 0.5) / f32(n)) * p.fov;
+    let cu = p.cu0 + ((f32(gid.x) + 0.5) / f32(n) - 0.5) * p.fov;
+    let cv = p.cv0 + (0.5 - (f32(gid.y) + 0.5) / f32(n)) * p.fov;
     let rt = mat3x3<f32>(   // columns of R^T = rows of R: camera -> object
         vec3<f32>(p.r00, p.r01, p.r02),
         vec3<f32>(p.r10, p.r11, p.r12),

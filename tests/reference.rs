@@ -2,8 +2,8 @@
 //! analytic Phong sphere and the analytic disk, renders are deterministic, the azimuth turns
 //! an asymmetric shape (with a 360-degree period), and `rendernet truth` writes a PNG.
 
-use rendernet::Gpu;
-use rendernet::reference::{Image, Light, Options, RayMarcher, Shader, View};
+use rendernet::reference::{GpuGrid, Image, Light, Options, Part, RayMarcher, Shader, View};
+use rendernet::{Gpu, Tensor};
 use rendernet::voxel::{VoxelGrid, shapes};
 use std::sync::OnceLock;
 
@@ -223,6 +223,64 @@ fn every_shader_renders_within_range() {
         assert_eq!(mask.get(0, 0, 0), 0.0);
         assert_eq!(bg, if shader == Shader::Contour { 1.0 } else { 0.0 }, "{shader:?} background");
         assert!(img.data.iter().any(|&v| v != bg), "{shader:?} is blank");
+    }
+}
+
+/// A [`Part`] draws the whole image's pixels: three parts of a chair's supersampled image
+/// (inside; at the frame's left edge; running 9 pixels past its right and bottom edges) match
+/// the whole image's pixels for every shader that reads no neighbours, and the rows and
+/// columns past the frame are marched, not left blank. Tolerance: the ray origins are
+/// computed from the part's centre, so they differ from the whole image's by f32 rounding
+/// (~1e-7 object units); a grazing ray can flip a sub-pixel, so 2 in 1000 values may differ
+/// by up to one sub-pixel's share, every other by 1e-4.
+#[test]
+fn a_part_draws_the_whole_images_pixels() {
+    let grid = shapes::chair(4).to_grid(24).unwrap();
+    let view = View { azimuth: 213.0, elevation: 58.0, radius: 2.4 };
+    let r = RayMarcher::new(gpu()).with_options(Options { supersample: 2, ..Options::default() });
+    let g = GpuGrid::upload(gpu(), &grid).unwrap();
+    let shaders = [Shader::Phong, Shader::Normal, Shader::Mask, Shader::Depth];
+    let draw = |side: usize, part: Option<Part>| -> Vec<Image> {
+        let outs: Vec<Tensor> = shaders.iter().map(|s| Tensor::zeros(gpu(), &[s.channels(), side, side]).unwrap()).collect();
+        let pairs: Vec<(Shader, &Tensor)> = shaders.iter().copied().zip(&outs).collect();
+        gpu().run(|pass| r.record_part(gpu(), pass, &g, &view, &Light::default(), &pairs, part)).unwrap();
+        shaders.iter().zip(&outs).map(|(s, t)| Image { channels: s.channels(), size: side, data: t.to_vec(gpu()).unwrap() }).collect()
+    };
+    let frame = 37;
+    let whole = draw(frame, None);
+    for (x0, y0, side) in [(7, 5, 19), (0, 11, 13), (28, 29, 17)] {
+        let part = draw(side, Some(Part { frame: frame as u32, x0: x0 as u32, y0: y0 as u32 }));
+        for (k, s) in shaders.iter().enumerate() {
+            let (mut n, mut off) = (0, 0);
+            for c in 0..s.channels() {
+                for (y, x) in (0..side).flat_map(|y| (0..side).map(move |x| (y, x))).filter(|&(y, x)| y0 + y < frame && x0 + x < frame) {
+                    let d = (part[k].get(c, y, x) - whole[k].get(c, y0 + y, x0 + x)).abs();
+                    assert!(d <= 0.26, "{s:?} part at ({x0}, {y0}) differs by {d} at ({x}, {y})");
+                    n += 1;
+                    off += (d > 1e-4) as usize;
+                }
+            }
+            assert!(off * 500 <= n, "{s:?} part at ({x0}, {y0}): {off} of {n} values differ");
+        }
+    }
+    // Past the frame's edge the chair is still drawn: at radius 1 the frame (0.6 object units
+    // wide) cuts through the chair.
+    let view = View { radius: 1.0, ..view };
+    let outs = [Tensor::zeros(gpu(), &[1, 24, 24]).unwrap()];
+    gpu().run(|pass| r.record_part(gpu(), pass, &g, &view, &Light::default(), &[(Shader::Mask, &outs[0])], Some(Part { frame: 16, x0: 4, y0: 4 }))).unwrap();
+    let beyond = Image { channels: 1, size: 24, data: outs[0].to_vec(gpu()).unwrap() };
+    let outside = (0..24).flat_map(|y| (0..24).map(move |x| (y, x))).filter(|&(y, x)| y >= 12 || x >= 12);
+    assert!(outside.map(|(y, x)| beyond.get(0, y, x)).any(|m| m > 0.5), "nothing drawn past the frame's edge");
+}
+
+#[test]
+fn a_part_outside_its_frame_is_an_error() {
+    let grid = shapes::chair(0).to_grid(16).unwrap();
+    let g = GpuGrid::upload(gpu(), &grid).unwrap();
+    let out = Tensor::zeros(gpu(), &[1, 8, 8]).unwrap();
+    for part in [Part { frame: 0, x0: 0, y0: 0 }, Part { frame: 8, x0: 8, y0: 0 }, Part { frame: 8, x0: 0, y0: 9 }] {
+        let r = gpu().run(|pass| renderer().record_part(gpu(), pass, &g, &View::default(), &Light::default(), &[(Shader::Mask, &out)], Some(part)));
+        assert!(r.is_err(), "{part:?} accepted");
     }
 }
 

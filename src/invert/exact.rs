@@ -12,10 +12,10 @@ use super::light::Maps;
 use super::starts::{POLISH_STEP_DEGREES, light_grid, light_starts};
 use super::{Inverter, RADIUS, Window};
 use crate::error::Result;
-use crate::gpu::Gpu;
+use crate::gpu::{Gpu, Tensor};
 use crate::nn::camera;
 use crate::nn::rendernet::phong_of;
-use crate::reference::{Image, Light, Options, RayMarcher, Shader, View};
+use crate::reference::{GpuGrid, Image, Light, Options, Part, RayMarcher, Shader, View};
 use crate::voxel::VoxelGrid;
 
 /// Sub-pixels per image pixel along each axis of the exact maps: `dataset`'s targets average
@@ -36,11 +36,15 @@ const POLISH_STEPS: [f64; 4] = [2.0, 1.0, 0.5, 0.25];
 const POLISH_ROUNDS: usize = 6;
 
 /// The known grid as the exact renderer draws it for one target: the grid (or the smoothing
-/// of it the image prefers), the window around the target's foreground and its pixels.
+/// of it the image prefers) on the GPU, the window around the target's foreground, its
+/// pixels, and the maps' buffers (normal, albedo, mask: [`SUB`] times the window's larger
+/// side, square). Only the window is marched, not the whole frame: a chair at radius 6
+/// covers a tenth of it, and the polish scores up to ~150 cameras per image.
 pub(super) struct ExactScene {
-    grid: VoxelGrid,
+    grid: GpuGrid,
     win: Window,
     target: Vec<f32>,
+    maps: [Tensor; 3],
 }
 
 impl Inverter {
@@ -48,18 +52,30 @@ impl Inverter {
     /// `target` best from `view` under its best light of the 20-degree grid.
     pub(super) fn exact_scene(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, view: &View) -> Result<ExactScene> {
         let (win, t) = self.window(target)?;
-        let mut scene = ExactScene { grid: grid.clone(), win, target: t };
-        let mut best = (self.exact_fit(gpu, &scene, view, &light_starts())?.0, grid.clone());
-        let mut g = grid.clone();
-        for _ in 0..SMOOTHINGS {
-            g = g.smoothed();
-            scene.grid = g.clone();
-            let e = self.exact_fit(gpu, &scene, view, &light_starts())?.0;
-            if e < best.0 {
-                best = (e, g.clone());
+        let [h, w] = win.pixel_dims();
+        let side = SUB * h.max(w);
+        let maps = [Tensor::zeros(gpu, &[3, side, side])?, Tensor::zeros(gpu, &[3, side, side])?, Tensor::zeros(gpu, &[1, side, side])?];
+        let mut grids = vec![GpuGrid::upload(gpu, grid)?];
+        let mut g = grid.smoothed();
+        for k in 0..SMOOTHINGS {
+            grids.push(GpuGrid::upload(gpu, &g)?);
+            if k + 1 < SMOOTHINGS {
+                g = g.smoothed();
             }
         }
-        scene.grid = best.1;
+        let mut scene = ExactScene { grid: grids.remove(0), win, target: t, maps };
+        let mut best = (self.exact_fit(gpu, &scene, view, &light_starts())?.0, None);
+        for (k, g) in grids.iter_mut().enumerate() {
+            std::mem::swap(&mut scene.grid, g);
+            let e = self.exact_fit(gpu, &scene, view, &light_starts())?.0;
+            std::mem::swap(&mut scene.grid, g);
+            if e < best.0 {
+                best = (e, Some(k));
+            }
+        }
+        if let Some(k) = best.1 {
+            scene.grid = grids.swap_remove(k);
+        }
         Ok(scene)
     }
 
@@ -123,9 +139,18 @@ impl Inverter {
     /// `view`, with its summed squared error against the scene's target.
     fn exact_fit(&self, gpu: &Gpu, scene: &ExactScene, view: &View, lights: &[(f64, f64)]) -> Result<(f64, Light)> {
         let rm = RayMarcher::new(gpu).with_options(Options { supersample: 1, ..Options::default() });
-        let drawn = rm.render_many(gpu, &scene.grid, view, &self.head_light, &[Shader::Normal, Shader::Albedo, Shader::Mask], (SUB * self.size) as u32)?;
         let fine = Window { f: SUB * scene.win.f, ..scene.win };
-        let [normal, albedo, mask] = [0, 1, 2].map(|k| fine.crop_rgb(&drawn[k]));
+        let part = Part { frame: (SUB * self.size) as u32, x0: (fine.cam[1] * fine.f) as u32, y0: (fine.cam[0] * fine.f) as u32 };
+        let [n, a, m] = &scene.maps;
+        let outs = [(Shader::Normal, n), (Shader::Albedo, a), (Shader::Mask, m)];
+        gpu.run(|pass| rm.record_part(gpu, pass, &scene.grid, view, &self.head_light, &outs, Some(part)))?;
+        let [h, w] = fine.pixel_dims();
+        let side = n.shape()[1];
+        let crop = |t: &Tensor| -> Result<Vec<f32>> {
+            let img = Image { channels: t.shape()[0], size: side, data: t.to_vec(gpu)? };
+            Ok(crate::train::batch::crop(&img, 0, 0, h, w))
+        };
+        let (normal, albedo, mask) = (crop(n)?, crop(a)?, crop(m)?);
         let maps = Maps::exact(&normal, &albedo, &mask, SUB, scene.win.pixel_dims()[1]);
         let ph = phong_of(&self.head_light);
         let best = lights

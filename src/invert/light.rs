@@ -98,6 +98,10 @@ impl Maps {
 
     fn pixel(&self, ph: &Phong, light: &[f32; 6], px: usize) -> [f32; 3] {
         let (n, a, m) = (self.normal[px], self.albedo[px], self.mask[px]);
+        if m == 0.0 {
+            // Background: most of a window, and `powf` is the costly part of a light's score.
+            return [0.0; 3];
+        }
         let d = n[0] * light[0] + n[1] * light[1] + n[2] * light[2];
         let s = 2.0 * d * n[2] - light[2];
         let spec = if s > 0.0 && (d > 0.0 || !self.cut) { s.powf(ph.shininess) } else { 0.0 };

@@ -29,6 +29,9 @@ const MARCH: gpu::Shader =
 const SHADE: gpu::Shader =
     gpu::wgsl!("reference_shade");
 
+/// Largest whole image a [`Part`] may belong to, pixels per side.
+pub const MAX_FRAME: u32 = 16384;
+
 /// G-buffer channels written by the march pass.
 const GBUF_CHANNELS: usize = 9;
 
@@ -189,6 +192,8 @@ struct MarchParams {
     unit: f32,
     step: f32,
     ao_radius: f32,
+    cu0: f32,
+    cv0: f32,
 }
 
 #[repr(C)]
@@ -211,6 +216,20 @@ struct ShadeParams {
     sc_half: f32,
     sc_min_bend: f32,
     sc_max_cos: f32,
+}
+
+/// A square part of a larger image of the same view: outputs of side `S` hold the pixels
+/// `[y0, y0 + S) x [x0, x0 + S)` of the `frame x frame` image ([`RayMarcher::record_part`]).
+/// The part may run past the frame's edge; rays there are marched like any other. What a
+/// caller that reads only a window of the image draws instead of the whole frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Part {
+    /// Side of the whole image, pixels.
+    pub frame: u32,
+    /// Column of the part's first pixel in the whole image.
+    pub x0: u32,
+    /// Row of the part's first pixel in the whole image.
+    pub y0: u32,
 }
 
 /// The reference (conventional, not learned) renderer: marches rays through the grid's
@@ -269,10 +288,7 @@ impl RayMarcher {
         self.record_many(gpu, pass, grid, view, light, &[(shader, out)])
     }
 
-    /// Like [`RayMarcher::record`] for several shaders of one view: the G-buffer is marched once
-    /// and shaded per output, so e.g. Phong, normal, albedo and mask cost one march, not four.
-    /// Every output must have the same size `S`.
-    #[allow(clippy::too_many_arguments)]
+    /// Like [`RayMarcher::record_part`] for the whole image.
     pub fn record_many(
         &self,
         gpu: &Gpu,
@@ -281,6 +297,25 @@ impl RayMarcher {
         view: &View,
         light: &Light,
         outs: &[(Shader, &Tensor)],
+    ) -> Result<()> {
+        self.record_part(gpu, pass, grid, view, light, outs, None)
+    }
+
+    /// Like [`RayMarcher::record`] for several shaders of one view: the G-buffer is marched once
+    /// and shaded per output, so e.g. Phong, normal, albedo and mask cost one march, not four.
+    /// Every output must have the same size `S`. With `part`, the outputs are that part of
+    /// the whole image (pixels as the whole image's, bit for bit up to f32 rounding of the
+    /// ray origins); the line shaders (contour, toon) treat the part's edge as the image's.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_part(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        grid: &GpuGrid,
+        view: &View,
+        light: &Light,
+        outs: &[(Shader, &Tensor)],
+        part: Option<Part>,
     ) -> Result<()> {
         let op = "reference::render";
         let o = &self.options;
@@ -307,10 +342,20 @@ impl RayMarcher {
             )));
         }
         let size = size as u32;
+        let part = part.unwrap_or(Part { frame: size, x0: 0, y0: 0 });
+        if !(1..=MAX_FRAME).contains(&part.frame) || part.x0 >= part.frame || part.y0 >= part.frame {
+            return Err(Error::Invalid(format!("{op}: part {part:?} must start inside a frame of 1..={MAX_FRAME} pixels")));
+        }
         let n = size * o.supersample;
+        // The whole image's sub-pixel count: what line widths and creases are measured in.
+        let frame_n = part.frame * o.supersample;
         let gbuf = Tensor::zeros(gpu, &[GBUF_CHANNELS, n as usize, n as usize])?;
         let unit = *grid.dims.iter().max().unwrap() as f32;
         let fov = view.fov() as f32;
+        // The part's centre on the camera plane and its width, object units (f64, so that
+        // the whole image gets exactly 0 and `fov`).
+        let frac = |p0: u32| (p0 as f64 + 0.5 * size as f64) / part.frame as f64 - 0.5;
+        let part_fov = view.fov() * size as f64 / part.frame as f64;
         let r = view.rotation().transpose().to_cols_array(); // rows of R, row-major
         let mp = MarchParams {
             dims: grid.dims.map(|d| d as u32),
@@ -320,10 +365,12 @@ impl RayMarcher {
             ao_dirs_sqrt: o.ao_dirs_sqrt,
             ao_steps: 8,
             r,
-            fov,
+            fov: part_fov as f32,
             unit,
             step: o.step,
             ao_radius: o.ao_radius * unit,
+            cu0: (frac(part.x0) * view.fov()) as f32,
+            cv0: (-frac(part.y0) * view.fov()) as f32,
         };
         let colour = grid.colour.as_ref().map(Arg::R).unwrap_or(Arg::Absent);
         let wg = [n.div_ceil(8), n.div_ceil(8), 1];
@@ -331,7 +378,7 @@ impl RayMarcher {
         let l = light.direction();
         // Half a voxel's width in sub-pixels (at least one output pixel): wider spacing would
         // let thin parts (one-voxel legs) compare their two sides.
-        let crease_step = ((0.5 * n as f32 / (fov * unit)).round() as i32).max(o.supersample as i32);
+        let crease_step = ((0.5 * frame_n as f32 / (fov * unit)).round() as i32).max(o.supersample as i32);
         for &(shader, out) in outs {
             let sp = ShadeParams {
                 size,
@@ -344,10 +391,10 @@ impl RayMarcher {
                 kd: light.kd,
                 ks: light.ks,
                 shininess: light.shininess,
-                depth_jump: o.depth_jump_pixels * fov / size as f32,
+                depth_jump: o.depth_jump_pixels * fov / part.frame as f32,
                 crease_cos: o.crease_degrees.to_radians().cos(),
                 crease_step,
-                sc_step: (o.suggestive_step_voxels * n as f32 / (fov * unit)).max(o.supersample as f32),
+                sc_step: (o.suggestive_step_voxels * frame_n as f32 / (fov * unit)).max(o.supersample as f32),
                 sc_half: 0.5 * o.supersample as f32,
                 sc_min_bend: o.suggestive_bend,
                 sc_max_cos: o.suggestive_max_cos,
