@@ -524,6 +524,11 @@ fn the_exact_renderer_picks_the_camera_among_the_hypotheses() {
     let s = inv.exact_scores(&gpu, &grid, &target, &[est.view, est.network_view]).unwrap();
     eprintln!("exact scores of the estimate and the network's pick: {s:?}");
     assert!(s[0] <= s[1], "the exact pick scores {} against the network's {}", s[0], s[1]);
+    // The light is the exact light of every direction at the camera found, and near the truth.
+    let exact = inv.light_exact(&gpu, &grid, &target, &est.view).unwrap();
+    assert_eq!((est.light.azimuth, est.light.elevation), (exact.azimuth, exact.elevation));
+    let off = rendernet::invert::angle_between(rendernet::invert::light_direction(&light), rendernet::invert::light_direction(&est.light));
+    assert!(off < 5.0, "light {off:.1} degrees from the truth");
     let net = inv.invert(&gpu, &grid, &target, &InvertOptions { pick: Pick::Network, ..o }, |_, _| {}).unwrap();
     assert_eq!((net.view.azimuth, net.view.elevation), (net.network_view.azimuth, net.network_view.elevation));
 }
