@@ -2,7 +2,7 @@
 //! analytic Phong sphere and the analytic disk, renders are deterministic, the azimuth turns
 //! an asymmetric shape (with a 360-degree period), and `rendernet truth` writes a PNG.
 
-use rendernet::reference::{GpuGrid, Image, Light, Options, Part, RayMarcher, Shader, View};
+use rendernet::reference::{GBUF_CHANNELS, GpuGrid, Image, Light, Options, Part, RayMarcher, Shader, View};
 use rendernet::{Gpu, Tensor};
 use rendernet::voxel::{VoxelGrid, shapes};
 use std::sync::OnceLock;
@@ -275,6 +275,39 @@ fn a_part_draws_the_whole_images_pixels() {
     let beyond = Image { channels: 1, size: 24, data: outs[0].to_vec(gpu()).unwrap() };
     let outside = (0..24).flat_map(|y| (0..24).map(move |x| (y, x))).filter(|&(y, x)| y >= 12 || x >= 12);
     assert!(outside.map(|(y, x)| beyond.get(0, y, x)).any(|m| m > 0.5), "nothing drawn past the frame's edge");
+}
+
+/// The G-buffer alone, at one sample per pixel, holds what the shading pass draws for
+/// Normal (encoded `(n + 1) / 2`), Albedo and Mask, within f32 rounding (1e-6), and a wrong
+/// G-buffer shape is an error.
+#[test]
+fn the_g_buffer_holds_the_normal_albedo_and_mask_images() {
+    let grid = shapes::chair(2).to_grid(20).unwrap();
+    let view = View { azimuth: 41.0, elevation: 66.0, radius: 2.2 };
+    let r = renderer();
+    let g = GpuGrid::upload(gpu(), &grid).unwrap();
+    let side = 29;
+    let gbuf = Tensor::zeros(gpu(), &[GBUF_CHANNELS, side, side]).unwrap();
+    gpu().run(|pass| r.record_gbuffer(gpu(), pass, &g, &view, None, false, &gbuf)).unwrap();
+    let gb = gbuf.to_vec(gpu()).unwrap();
+    let plane = side * side;
+    let (normal, albedo, mask) = (render_sized(&grid, &view, Shader::Normal, side), render_sized(&grid, &view, Shader::Albedo, side), render_sized(&grid, &view, Shader::Mask, side));
+    assert!(gb[..plane].iter().any(|&m| m == 1.0) && gb[..plane].contains(&0.0), "the chair should cover part of the image");
+    for k in 0..plane {
+        let hit = gb[k] != 0.0;
+        assert_eq!(mask.data[k], if hit { 1.0 } else { 0.0 }, "mask at {k}");
+        for c in 0..3 {
+            let n = if hit { (gb[(2 + c) * plane + k] + 1.0) * 0.5 } else { 0.0 };
+            let a = if hit { gb[(5 + c) * plane + k] } else { 0.0 };
+            assert!((normal.data[c * plane + k] - n).abs() < 1e-6 && (albedo.data[c * plane + k] - a).abs() < 1e-6, "channel {c} at {k}");
+        }
+    }
+    let bad = Tensor::zeros(gpu(), &[GBUF_CHANNELS - 1, side, side]).unwrap();
+    assert!(gpu().run(|pass| r.record_gbuffer(gpu(), pass, &g, &view, None, false, &bad)).is_err());
+}
+
+fn render_sized(grid: &VoxelGrid, view: &View, shader: Shader, side: usize) -> Image {
+    renderer().render(gpu(), grid, view, &Light::default(), shader, side as u32).unwrap()
 }
 
 #[test]

@@ -98,14 +98,15 @@ pub struct InvertArgs {
     /// Shipped Phong network that picks the final light at the recovered camera (its best
     /// light over a 5-degree grid of directions) and draws the estimate: base, whose lights
     /// measured closer to the truth on procedural chairs but not on real meshes (README), or
-    /// none to keep the search's own light (the exact polish's with --pick exact). Not with
+    /// none to keep the search's own light (the exact light's with --pick exact). Not with
     /// --prior or --texture.
     #[arg(long, value_name = "PRESET", default_value = "none", value_parser = LIGHT_NETWORKS, conflicts_with_all = ["prior", "texture"])]
     light_network: String,
     /// What picks the camera among the search's hypotheses: exact (default) draws the refined
-    /// ones, the best unrefined views and the far-side twins of all with the reference renderer
-    /// from the known grid, keeps the one whose maps explain the image best and refines camera
-    /// and light on those maps (the light reported is theirs); network keeps
+    /// ones, the best unrefined views, the far-side twins of all and a 15-degree camera grid
+    /// with the reference renderer from the known grid, refines camera and light of the 3
+    /// distinct ones whose maps explain the image best on those maps, keeps the best, and
+    /// searches the light over every direction there (the light reported); network keeps
     /// the network's own lowest image MSE (the paper's way). With --prior the network picks.
     #[arg(long, value_enum, default_value_t = PickArg::Exact)]
     pick: PickArg,
@@ -310,13 +311,14 @@ pub struct EvalInvertArgs {
     /// Shipped Phong network that picks the final light at the recovered camera (its best
     /// light over a 5-degree grid of directions) and draws the estimate: base, whose lights
     /// measured closer to the truth on procedural chairs but not on real meshes (README), or
-    /// none to keep the search's own light (the exact polish's with --pick exact).
+    /// none to keep the search's own light (the exact light's with --pick exact).
     #[arg(long, value_name = "PRESET", default_value = "none", value_parser = LIGHT_NETWORKS)]
     light_network: String,
     /// What picks the camera among the search's hypotheses: exact (default) draws the refined
-    /// ones, the best unrefined views and the far-side twins of all with the reference renderer
-    /// from the known grid, keeps the one whose maps explain the image best and refines camera
-    /// and light on those maps (the light reported is theirs); network keeps
+    /// ones, the best unrefined views, the far-side twins of all and a 15-degree camera grid
+    /// with the reference renderer from the known grid, refines camera and light of the 3
+    /// distinct ones whose maps explain the image best on those maps, keeps the best, and
+    /// searches the light over every direction there (the light reported); network keeps
     /// the network's own lowest image MSE (the paper's way).
     #[arg(long, value_enum, default_value_t = PickArg::Exact)]
     pick: PickArg,

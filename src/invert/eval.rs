@@ -36,8 +36,8 @@ pub struct InvertError {
     pub network_pose_degrees: f64,
     /// Angle between the true and recovered light directions, degrees.
     pub light_degrees: f64,
-    /// The same for the search's own light (`Estimate::search_light`: the exact polish's
-    /// with `Pick::Exact`): equal to `light_degrees` without a light network.
+    /// The same for the search's own light (`Estimate::search_light`: the exact light at the
+    /// polished camera with `Pick::Exact`): equal to `light_degrees` without a light network.
     pub search_light_degrees: f64,
     /// Angle between the true light and the best light at the true camera
     /// ([`Inverter::light_optimum`]) of the network that picks the light (the light network

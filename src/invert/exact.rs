@@ -15,7 +15,7 @@ use crate::error::Result;
 use crate::gpu::{Gpu, Tensor};
 use crate::nn::camera;
 use crate::nn::rendernet::phong_of;
-use crate::reference::{GpuGrid, Image, Light, Options, Part, RayMarcher, Shader, View};
+use crate::reference::{GBUF_CHANNELS, GpuGrid, Image, Light, Options, Part, RayMarcher, View};
 use crate::voxel::VoxelGrid;
 
 /// Sub-pixels per image pixel along each axis of the exact maps: `dataset`'s targets average
@@ -37,14 +37,16 @@ const POLISH_ROUNDS: usize = 6;
 
 /// The known grid as the exact renderer draws it for one target: the grid (or the smoothing
 /// of it the image prefers) on the GPU, the window around the target's foreground, its
-/// pixels, and the maps' buffers (normal, albedo, mask: [`SUB`] times the window's larger
-/// side, square). Only the window is marched, not the whole frame: a chair at radius 6
-/// covers a tenth of it, and the polish scores up to ~150 cameras per image.
+/// pixels, and the G-buffer the maps are read from ([`SUB`] times the window's larger side,
+/// square). Only the window is marched, not the whole frame: a chair at radius 6 covers a
+/// tenth of it, and a search scores ~500 cameras per image. The maps are the unshaded
+/// G-buffer: on lavapipe (Mesa 22.3.6) every dispatch of the reference shading pass leaked
+/// ~0.6 MB, which ran `eval-invert` out of memory.
 pub(super) struct ExactScene {
     grid: GpuGrid,
     win: Window,
     target: Vec<f32>,
-    maps: [Tensor; 3],
+    gbuf: Tensor,
 }
 
 impl Inverter {
@@ -54,7 +56,7 @@ impl Inverter {
         let (win, t) = self.window(target)?;
         let [h, w] = win.pixel_dims();
         let side = SUB * h.max(w);
-        let maps = [Tensor::zeros(gpu, &[3, side, side])?, Tensor::zeros(gpu, &[3, side, side])?, Tensor::zeros(gpu, &[1, side, side])?];
+        let gbuf = Tensor::zeros(gpu, &[GBUF_CHANNELS, side, side])?;
         let mut grids = vec![GpuGrid::upload(gpu, grid)?];
         let mut g = grid.smoothed();
         for k in 0..SMOOTHINGS {
@@ -63,7 +65,7 @@ impl Inverter {
                 g = g.smoothed();
             }
         }
-        let mut scene = ExactScene { grid: grids.remove(0), win, target: t, maps };
+        let mut scene = ExactScene { grid: grids.remove(0), win, target: t, gbuf };
         let mut best = (self.exact_fit(gpu, &scene, view, &light_starts())?.0, None);
         for (k, g) in grids.iter_mut().enumerate() {
             std::mem::swap(&mut scene.grid, g);
@@ -141,16 +143,19 @@ impl Inverter {
         let rm = RayMarcher::new(gpu).with_options(Options { supersample: 1, ..Options::default() });
         let fine = Window { f: SUB * scene.win.f, ..scene.win };
         let part = Part { frame: (SUB * self.size) as u32, x0: (fine.cam[1] * fine.f) as u32, y0: (fine.cam[0] * fine.f) as u32 };
-        let [n, a, m] = &scene.maps;
-        let outs = [(Shader::Normal, n), (Shader::Albedo, a), (Shader::Mask, m)];
-        gpu.run(|pass| rm.record_part(gpu, pass, &scene.grid, view, &self.head_light, &outs, Some(part)))?;
+        gpu.run(|pass| rm.record_gbuffer(gpu, pass, &scene.grid, view, Some(part), false, &scene.gbuf))?;
+        let g = scene.gbuf.to_vec(gpu)?;
         let [h, w] = fine.pixel_dims();
-        let side = n.shape()[1];
-        let crop = |t: &Tensor| -> Result<Vec<f32>> {
-            let img = Image { channels: t.shape()[0], size: side, data: t.to_vec(gpu)? };
-            Ok(crate::train::batch::crop(&img, 0, 0, h, w))
+        let side = scene.gbuf.shape()[1];
+        // Channel `c` of the window's pixels, where the ray hit (0 elsewhere, as the shading
+        // pass draws the background), through `f`.
+        let at = |c: usize, f: fn(f32) -> f32| -> Vec<f32> {
+            (0..h * w).map(|i| (i / w) * side + i % w).map(|k| if g[k] != 0.0 { f(g[c * side * side + k]) } else { 0.0 }).collect()
         };
-        let (normal, albedo, mask) = (crop(n)?, crop(a)?, crop(m)?);
+        let encode = |n: f32| (n + 1.0) * 0.5; // as the Normal image encodes a normal
+        let normal: Vec<f32> = [2, 3, 4].iter().flat_map(|&c| at(c, encode)).collect();
+        let albedo: Vec<f32> = [5, 6, 7].iter().flat_map(|&c| at(c, |a| a)).collect();
+        let mask = at(0, |_| 1.0);
         let maps = Maps::exact(&normal, &albedo, &mask, SUB, scene.win.pixel_dims()[1]);
         let ph = phong_of(&self.head_light);
         let best = lights
@@ -193,6 +198,7 @@ mod tests {
     use super::super::{angle_between, light_direction, view_direction};
     use super::*;
     use crate::nn::rendernet::Preset;
+    use crate::reference::Shader;
 
     /// The bunny's camera in these tests.
     const VIEW: View = View { azimuth: 75.0, elevation: 60.0, radius: 3.5 };

@@ -77,7 +77,7 @@ pub struct Estimate {
     /// Recovered light (the network's material constants, white).
     pub light: Light,
     /// The search's light, before a light network picked `light`
-    /// ([`Inverter::with_light_network`]; without one, `light`): the exact polish's with
+    /// ([`Inverter::with_light_network`]; without one, `light`): the exact light at the polished camera with
     /// [`Pick::Exact`], the searching network's own with [`Pick::Network`].
     pub search_light: Light,
     /// The camera the network's own image MSE picked ([`Pick::Network`]); with

@@ -32,8 +32,8 @@ const SHADE: gpu::Shader =
 /// Largest whole image a [`Part`] may belong to, pixels per side.
 pub const MAX_FRAME: u32 = 16384;
 
-/// G-buffer channels written by the march pass.
-const GBUF_CHANNELS: usize = 9;
+/// G-buffer channels written by the march pass ([`RayMarcher::record_gbuffer`]).
+pub const GBUF_CHANNELS: usize = 9;
 
 /// What the reference renderer outputs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -301,6 +301,76 @@ impl RayMarcher {
         self.record_part(gpu, pass, grid, view, light, outs, None)
     }
 
+    /// Records the march alone: writes the G-buffer `gbuf` (`[GBUF_CHANNELS, N, N]`, `N` =
+    /// the image side times [`Options::supersample`]) of `part` of the image (the whole image
+    /// without), unshaded: channel 0 the mask (1 hit, 0 miss), 1 the camera-frame depth of the
+    /// hit, 2..=4 the camera-frame unit normal, 5..=7 the albedo, 8 the ambient occlusion
+    /// (only with `want_ao`). At one sample per pixel these are the Normal (decoded), Albedo
+    /// and Mask images without the shading pass: what a caller that shades on the CPU reads.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_gbuffer(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        grid: &GpuGrid,
+        view: &View,
+        part: Option<Part>,
+        want_ao: bool,
+        gbuf: &Tensor,
+    ) -> Result<()> {
+        let op = "reference::render";
+        self.check_options(op)?;
+        view.validate().map_err(|m| Error::Invalid(format!("{op}: view: {m}")))?;
+        let o = &self.options;
+        let shape = gbuf.shape();
+        if shape.len() != 3 || shape[0] != GBUF_CHANNELS || shape[1] != shape[2] || shape[1] == 0 || shape[1] % o.supersample as usize != 0 {
+            return Err(crate::error::shape_err(op, format!("G-buffer has shape {shape:?}, expected [{GBUF_CHANNELS}, N, N] with N a positive multiple of the supersampling {}", o.supersample)));
+        }
+        let n = shape[1] as u32;
+        let size = n / o.supersample;
+        let part = part.unwrap_or(Part { frame: size, x0: 0, y0: 0 });
+        if !(1..=MAX_FRAME).contains(&part.frame) || part.x0 >= part.frame || part.y0 >= part.frame {
+            return Err(Error::Invalid(format!("{op}: part {part:?} must start inside a frame of 1..={MAX_FRAME} pixels")));
+        }
+        let unit = *grid.dims.iter().max().unwrap() as f32;
+        // The part's centre on the camera plane and its width, object units (f64, so that
+        // the whole image gets exactly 0 and `fov`).
+        let frac = |p0: u32| (p0 as f64 + 0.5 * size as f64) / part.frame as f64 - 0.5;
+        let part_fov = view.fov() * size as f64 / part.frame as f64;
+        let r = view.rotation().transpose().to_cols_array(); // rows of R, row-major
+        let mp = MarchParams {
+            dims: grid.dims.map(|d| d as u32),
+            size: n,
+            has_colour: grid.colour.is_some() as u32,
+            want_ao: want_ao as u32,
+            ao_dirs_sqrt: o.ao_dirs_sqrt,
+            ao_steps: 8,
+            r,
+            fov: part_fov as f32,
+            unit,
+            step: o.step,
+            ao_radius: o.ao_radius * unit,
+            cu0: (frac(part.x0) * view.fov()) as f32,
+            cv0: (-frac(part.y0) * view.fov()) as f32,
+        };
+        let colour = grid.colour.as_ref().map(Arg::R).unwrap_or(Arg::Absent);
+        let wg = [n.div_ceil(8), n.div_ceil(8), 1];
+        gpu.dispatch(pass, MARCH, "reference_march", &mp, &[Arg::R(&grid.occupancy), colour, Arg::W(gbuf)], wg)
+    }
+
+    /// The options, or an error naming the one out of range.
+    fn check_options(&self, op: &str) -> Result<()> {
+        let o = &self.options;
+        let step_ok = o.step > 0.0 && o.step <= 2.0;
+        let sc_ok = o.suggestive_bend >= 0.0 && !o.suggestive_max_cos.is_nan() && o.suggestive_step_voxels > 0.0 && o.suggestive_step_voxels <= 8.0;
+        if !(1..=8).contains(&o.supersample) || !step_ok || o.ao_dirs_sqrt == 0 || !o.ao_radius.is_finite() || !sc_ok {
+            return Err(Error::Invalid(format!(
+                "{op}: options {o:?} out of range (supersample 1..=8, step in (0, 2], ao_dirs_sqrt >= 1, suggestive_bend >= 0, suggestive_step_voxels in (0, 8])"
+            )));
+        }
+        Ok(())
+    }
+
     /// Like [`RayMarcher::record`] for several shaders of one view: the G-buffer is marched once
     /// and shaded per output, so e.g. Phong, normal, albedo and mask cost one march, not four.
     /// Every output must have the same size `S`. With `part`, the outputs are that part of
@@ -318,7 +388,6 @@ impl RayMarcher {
         part: Option<Part>,
     ) -> Result<()> {
         let op = "reference::render";
-        let o = &self.options;
         let Some(&(_, first)) = outs.first() else {
             return Err(Error::Invalid(format!("{op}: no outputs requested")));
         };
@@ -332,49 +401,20 @@ impl RayMarcher {
                 ));
             }
         }
-        view.validate().map_err(|m| Error::Invalid(format!("{op}: view: {m}")))?;
         light.validate().map_err(|m| Error::Invalid(format!("{op}: light: {m}")))?;
-        let step_ok = o.step > 0.0 && o.step <= 2.0;
-        let sc_ok = o.suggestive_bend >= 0.0 && !o.suggestive_max_cos.is_nan() && o.suggestive_step_voxels > 0.0 && o.suggestive_step_voxels <= 8.0;
-        if !(1..=8).contains(&o.supersample) || !step_ok || o.ao_dirs_sqrt == 0 || !o.ao_radius.is_finite() || !sc_ok {
-            return Err(Error::Invalid(format!(
-                "{op}: options {o:?} out of range (supersample 1..=8, step in (0, 2], ao_dirs_sqrt >= 1, suggestive_bend >= 0, suggestive_step_voxels in (0, 8])"
-            )));
-        }
+        self.check_options(op)?;
+        let o = &self.options;
         let size = size as u32;
         let part = part.unwrap_or(Part { frame: size, x0: 0, y0: 0 });
-        if !(1..=MAX_FRAME).contains(&part.frame) || part.x0 >= part.frame || part.y0 >= part.frame {
-            return Err(Error::Invalid(format!("{op}: part {part:?} must start inside a frame of 1..={MAX_FRAME} pixels")));
-        }
         let n = size * o.supersample;
-        // The whole image's sub-pixel count: what line widths and creases are measured in.
-        let frame_n = part.frame * o.supersample;
         let gbuf = Tensor::zeros(gpu, &[GBUF_CHANNELS, n as usize, n as usize])?;
+        let want_ao = outs.iter().any(|&(s, _)| s == Shader::AmbientOcclusion);
+        self.record_gbuffer(gpu, pass, grid, view, Some(part), want_ao, &gbuf)?;
+        // The whole image's sub-pixel count (the part checked): what line widths and creases
+        // are measured in.
+        let frame_n = part.frame * o.supersample;
         let unit = *grid.dims.iter().max().unwrap() as f32;
         let fov = view.fov() as f32;
-        // The part's centre on the camera plane and its width, object units (f64, so that
-        // the whole image gets exactly 0 and `fov`).
-        let frac = |p0: u32| (p0 as f64 + 0.5 * size as f64) / part.frame as f64 - 0.5;
-        let part_fov = view.fov() * size as f64 / part.frame as f64;
-        let r = view.rotation().transpose().to_cols_array(); // rows of R, row-major
-        let mp = MarchParams {
-            dims: grid.dims.map(|d| d as u32),
-            size: n,
-            has_colour: grid.colour.is_some() as u32,
-            want_ao: outs.iter().any(|&(s, _)| s == Shader::AmbientOcclusion) as u32,
-            ao_dirs_sqrt: o.ao_dirs_sqrt,
-            ao_steps: 8,
-            r,
-            fov: part_fov as f32,
-            unit,
-            step: o.step,
-            ao_radius: o.ao_radius * unit,
-            cu0: (frac(part.x0) * view.fov()) as f32,
-            cv0: (-frac(part.y0) * view.fov()) as f32,
-        };
-        let colour = grid.colour.as_ref().map(Arg::R).unwrap_or(Arg::Absent);
-        let wg = [n.div_ceil(8), n.div_ceil(8), 1];
-        gpu.dispatch(pass, MARCH, "reference_march", &mp, &[Arg::R(&grid.occupancy), colour, Arg::W(&gbuf)], wg)?;
         let l = light.direction();
         // Half a voxel's width in sub-pixels (at least one output pixel): wider spacing would
         // let thin parts (one-voxel legs) compare their two sides.
