@@ -231,8 +231,10 @@ fn every_shader_renders_within_range() {
 /// the whole image's pixels (contours away from the part's edge), and the rows and
 /// columns past the frame are marched, not left blank. Tolerance: the ray origins are
 /// computed from the part's centre, so they differ from the whole image's by f32 rounding
-/// (~1e-7 object units); a grazing ray can flip a sub-pixel, so 2 in 1000 values may differ
-/// by up to one sub-pixel's share, every other by 1e-4.
+/// (~1e-7 object units); a grazing ray can flip a sub-pixel, so 1 value plus 2 in 1000 may
+/// differ by up to one sub-pixel's share, every other by 1e-4 (measured on lavapipe: none
+/// differ). Contours are compared 5 pixels from the part's and the frame's edges, where
+/// neither image clamps its neighbours.
 #[test]
 fn a_part_draws_the_whole_images_pixels() {
     let grid = shapes::chair(4).to_grid(24).unwrap();
@@ -256,7 +258,8 @@ fn a_part_draws_the_whole_images_pixels() {
                 // Contour lines read neighbours up to two voxels (here 4 pixels) away, which
                 // the part clamps at its edge: compared inside, 5 pixels from its edge.
                 let m = if *s == Shader::Contour { 5 } else { 0 };
-                let inside = |y: usize, x: usize| y0 + y < frame && x0 + x < frame && y >= m && x >= m && y + m < side && x + m < side;
+                let clear = |v: usize, len: usize| v >= m && v + m < len;
+                let inside = |y: usize, x: usize| clear(y0 + y, frame) && clear(x0 + x, frame) && clear(y, side) && clear(x, side);
                 for (y, x) in (0..side).flat_map(|y| (0..side).map(move |x| (y, x))).filter(|&(y, x)| inside(y, x)) {
                     let d = (part[k].get(c, y, x) - whole[k].get(c, y0 + y, x0 + x)).abs();
                     assert!(d <= 0.26, "{s:?} part at ({x0}, {y0}) differs by {d} at ({x}, {y})");
@@ -264,7 +267,7 @@ fn a_part_draws_the_whole_images_pixels() {
                     off += (d > 1e-4) as usize;
                 }
             }
-            assert!(off * 500 <= n, "{s:?} part at ({x0}, {y0}): {off} of {n} values differ");
+            assert!(off <= 1 + n / 500, "{s:?} part at ({x0}, {y0}): {off} of {n} values differ");
         }
     }
     // Past the frame's edge the chair is still drawn: at radius 1 the frame (0.6 object units

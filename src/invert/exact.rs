@@ -1,8 +1,8 @@
 //! The known grid drawn by the exact renderer (the reference ray marcher) instead of the
 //! network: how well a camera explains the image ([`Inverter::exact_scores`], what
 //! [`super::Pick::Exact`] ranks hypotheses by), the light the grid and the image alone
-//! allow ([`Inverter::light_exact`]), and the exact polish of camera and light that ends a
-//! [`super::Pick::Exact`] search. The maps (normal, albedo, mask) are drawn at [`SUB`] x
+//! allow ([`Inverter::light_exact`], the light a [`super::Pick::Exact`] search reports), and
+//! the exact polish of camera and light that refines its best hypotheses. The maps (normal, albedo, mask) are drawn at [`SUB`] x
 //! [`SUB`] sub-pixels and each sub-pixel is shaded before the block is averaged, with the
 //! highlight cut where the light is behind the surface: how the datasets' targets are drawn.
 //! Averaging normals before shading (sessions 33-34) left the light 11.8 degrees off at the

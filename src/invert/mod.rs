@@ -13,8 +13,9 @@
 //! `(azimuth, elevation, ln radius, light azimuth, light elevation)` with the image MSE as
 //! loss; gradients reach the pose through the resampling op and the light through the Phong
 //! op. The start with the lowest final MSE wins ([`Pick::Network`]), or, by default
-//! ([`Pick::Exact`]), the hypothesis whose exact render of the known grid explains the image
-//! best, its camera and light then refined on that exact render (`exact.rs`).
+//! ([`Pick::Exact`]) the exact render of the known grid arbitrates: the hypotheses, their
+//! far-side twins and a coarse camera grid are scored on it, the best few refined on it, and
+//! the light searched on it at the camera that wins (`pick.rs`, `exact.rs`).
 
 mod code;
 mod eval;
@@ -354,8 +355,11 @@ impl Inverter {
             // the scene chosen there, lands nearer the truth (real meshes: 11.3 -> 9.5
             // degrees median).
             let v = self.exact_pick(gpu, grid, target, &refined, &pool_views)?;
-            let l = self.light_exact(gpu, grid, target, &v)?;
-            best = Vars([v.azimuth, v.elevation, v.radius.ln(), l.azimuth, l.elevation]);
+            best = Vars([v.azimuth, v.elevation, v.radius.ln(), best.0[3], best.0[4]]);
+            // At the estimate's own view (its radius through ln and exp), so that
+            // `light_exact(estimate.view)` gives this light back.
+            let l = self.light_exact(gpu, grid, target, &best.view())?;
+            (best.0[3], best.0[4]) = (l.azimuth, l.elevation);
         }
         // A light network then picks the light at that camera, its best of the polish grid
         // (README "Inverse rendering": with tiny searching and base picking, closer to the
