@@ -104,9 +104,8 @@ pub struct InvertArgs {
     light_network: String,
     /// What picks the camera among the search's hypotheses: exact (default) draws the refined
     /// ones, the best unrefined views, the far-side twins of all and a 15-degree camera grid
-    /// with the reference renderer from the known grid, refines camera and light of the
-    /// network's best and of the 3 ones 30 degrees apart whose maps explain the image best on
-    /// those maps, keeps the best, and
+    /// with the reference renderer from the known grid, refines camera and light of the 3
+    /// distinct ones whose maps explain the image best on those maps, keeps the best, and
     /// searches the light over every direction there (the light reported); network keeps
     /// the network's own lowest image MSE (the paper's way). With --prior the network picks.
     #[arg(long, value_enum, default_value_t = PickArg::Exact)]
@@ -317,9 +316,8 @@ pub struct EvalInvertArgs {
     light_network: String,
     /// What picks the camera among the search's hypotheses: exact (default) draws the refined
     /// ones, the best unrefined views, the far-side twins of all and a 15-degree camera grid
-    /// with the reference renderer from the known grid, refines camera and light of the
-    /// network's best and of the 3 ones 30 degrees apart whose maps explain the image best on
-    /// those maps, keeps the best, and
+    /// with the reference renderer from the known grid, refines camera and light of the 3
+    /// distinct ones whose maps explain the image best on those maps, keeps the best, and
     /// searches the light over every direction there (the light reported); network keeps
     /// the network's own lowest image MSE (the paper's way).
     #[arg(long, value_enum, default_value_t = PickArg::Exact)]

@@ -18,8 +18,7 @@ pub enum Pick {
     /// starts (the refinement's and the light polish's), the subdivided views, the best views
     /// of the ranking before subdivision, the opposite-side twins of all of them and a
     /// 15-degree grid of cameras of the exact renderer's own are drawn by the ray marcher
-    /// (normal, albedo, mask), each lit by its best light of the 20-degree grid. The network's best and the best
-    /// [`POLISHED_PICKS`] of them at least 30 degrees apart are refined by the exact
+    /// (normal, albedo, mask), each lit by its best light of the 20-degree grid. The best [`POLISHED_PICKS`] of them that lie apart are refined by the exact
     /// polish (`Inverter::exact_polish`: camera and light on the exact maps themselves, the
     /// grid smoothed as the image prefers) and the lowest polished score wins; last, the
     /// light is searched again over every direction at that camera
@@ -30,13 +29,12 @@ pub enum Pick {
     Exact,
 }
 
-/// Hypotheses [`Inverter::exact_pick`] polishes besides the network's best: the best-scoring
-/// ones, each at least [`DISTINCT_DEGREES`] from the others (so they stand for different
-/// basins, not neighbours in one). Under the 20-degree light grid a camera seen from the
+/// Hypotheses [`Inverter::exact_pick`] polishes: the best-scoring ones, each at least
+/// [`DISTINCT_DEGREES`] from the others. Under the 20-degree light grid a camera seen from the
 /// far side can score just below the true one; polished, the true one wins (two real meshes,
 /// deckChair and modernArmchair: 2.74 against 2.83, 9.42 against 9.62).
 const POLISHED_PICKS: usize = 3;
-const DISTINCT_DEGREES: f64 = 30.0;
+const DISTINCT_DEGREES: f64 = 10.0;
 
 /// Spacing of the exact renderer's own camera grid (azimuth and elevation, degrees, at the
 /// network's best radius), scored beside the network's hypotheses: on three real meshes
@@ -48,7 +46,7 @@ const EXACT_GRID_DEGREES: f64 = 15.0;
 impl Inverter {
     /// [`Pick::Exact`]: of the `refined` hypotheses (the network's best first), the
     /// `unrefined` views, the far-side twins of all and a grid of cameras every
-    /// [`EXACT_GRID_DEGREES`], the network's best and the [`POLISHED_PICKS`] distinct ones
+    /// [`EXACT_GRID_DEGREES`], the [`POLISHED_PICKS`] distinct ones
     /// whose exact maps explain `target` best are each refined by the exact polish, and the
     /// camera of the lowest polished score is returned. All are scored and polished in one
     /// scene (the grid smoothed as the image prefers from the network's best), so the scores
@@ -68,12 +66,9 @@ impl Inverter {
         let scores = self.scores_in(gpu, &scene, &views)?;
         let mut order: Vec<usize> = (0..views.len()).collect();
         order.sort_by(|&a, &b| scores[a].total_cmp(&scores[b]));
-        // The network's best is always polished: the grid's cameras can crowd the ranking with
-        // views of one wrong basin (two real meshes went from within 1 degree to 160 degrees
-        // off when they did).
-        let mut picks: Vec<View> = vec![views[0]];
+        let mut picks: Vec<View> = Vec::with_capacity(POLISHED_PICKS);
         for v in order.into_iter().map(|k| views[k]) {
-            if picks.len() < 1 + POLISHED_PICKS && picks.iter().all(|p| angle_between(view_direction(p), view_direction(&v)) >= DISTINCT_DEGREES) {
+            if picks.len() < POLISHED_PICKS && picks.iter().all(|p| angle_between(view_direction(p), view_direction(&v)) >= DISTINCT_DEGREES) {
                 picks.push(v);
             }
         }
