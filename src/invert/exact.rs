@@ -46,12 +46,19 @@ pub(super) struct ExactScene {
     /// The grid and its [`SMOOTHINGS`], uploaded once.
     grids: Vec<GpuGrid>,
     /// Which of `grids` the maps are drawn from.
-    chosen: usize,
+    pub(super) chosen: usize,
     win: Window,
     target: Vec<f32>,
     /// The target's foreground pixels inside the window.
     fg_pixels: usize,
     gbuf: Tensor,
+}
+
+impl ExactScene {
+    /// How many grids (the grid and its smoothings) `chosen` picks among.
+    pub(super) fn smoothings(&self) -> usize {
+        self.grids.len()
+    }
 }
 
 impl Inverter {

@@ -22,8 +22,8 @@ pub enum Pick {
     /// grid's silhouette covers the target's foreground) are drawn by the ray marcher
     /// (normal, albedo, mask), each lit by its best light of the 20-degree grid. The best
     /// [`POLISHED_PICKS`] of them that lie apart are refined by the exact polish
-    /// (`Inverter::exact_polish`: camera and light on the exact maps themselves, the grid
-    /// smoothed as the image prefers from each) and the lowest polished score wins; last, the
+    /// (`Inverter::exact_polish`: camera and light on the exact maps themselves, once in each
+    /// smoothing of the grid) and the lowest polished score wins; last, the
     /// light is searched again over every direction at that camera
     /// ([`Inverter::light_exact`]). The network proposes and refines, the grid itself
     /// arbitrates: a network's render from the wrong side can explain an image better than
@@ -80,17 +80,19 @@ impl Inverter {
         self.polish_best(gpu, &mut scene, &picks)
     }
 
-    /// Each of `picks` refined by the exact polish in the scene smoothed as the image prefers
-    /// from that pick ([`Inverter::choose_smoothing`]: a far-side camera may prefer another
-    /// smoothing than the true one, and each is judged in the one it prefers); the camera of
-    /// the lowest polished score.
+    /// Each of `picks` refined by the exact polish once in each of the scene's smoothings
+    /// (the smoothing is a nuisance like the light: a camera's score is its best over them,
+    /// and a smoothing chosen at an unpolished start can be the wrong one for the camera it
+    /// polishes to); the camera of the lowest polished score.
     pub(super) fn polish_best(&self, gpu: &Gpu, scene: &mut ExactScene, picks: &[View]) -> Result<View> {
         let mut best: Option<(f64, View)> = None;
         for p in picks {
-            self.choose_smoothing(gpu, scene, p)?;
-            let (e, v, _) = self.exact_polish(gpu, scene, p)?;
-            if best.is_none_or(|b| e < b.0) {
-                best = Some((e, v));
+            for k in 0..scene.smoothings() {
+                scene.chosen = k;
+                let (e, v, _) = self.exact_polish(gpu, scene, p)?;
+                if best.is_none_or(|b| e < b.0) {
+                    best = Some((e, v));
+                }
             }
         }
         best.map(|b| b.1).ok_or_else(|| crate::error::Error::Invalid("exact pick: no camera to polish".into()))
