@@ -40,10 +40,11 @@ const POLISHED_PICKS: usize = 3;
 const DISTINCT_DEGREES: f64 = 10.0;
 
 /// Spacing of the exact renderer's own camera grid (azimuth and elevation, degrees, each
-/// camera at the radius that matches the target's foreground area, `Inverter::sized`), scored beside the network's hypotheses: on three real meshes
-/// (sillaBlanca, silla2, stool2) no hypothesis of the network's search came within 10
-/// degrees of the truth, while the best-scoring cell of this grid did (10, 4 and 1 degrees
-/// off; the polish walks the rest).
+/// camera at the radius that matches the target's foreground area, `Inverter::sized`),
+/// scored beside the network's hypotheses: on three real meshes (sillaBlanca, silla2,
+/// stool2) no hypothesis of the network's search came within 10 degrees of the truth, while
+/// the best-scoring cell of this grid at the true radius did (10, 4 and 1 degrees off; the
+/// polish walks the rest).
 const EXACT_GRID_DEGREES: f64 = 15.0;
 
 impl Inverter {
@@ -53,9 +54,10 @@ impl Inverter {
     /// distinct ones whose exact maps explain `target` best are each refined by the exact
     /// polish, and the camera of the lowest polished score is returned
     /// ([`Inverter::polish_best`]). All are ranked in one scene (the grid smoothed as the
-    /// image prefers from the network's best), so the ranking's scores compare. The polish scores under the 5-degree light grid, not the ranking's 20-degree
-    /// one, so the camera returned is the best polished, not provably below the network's
-    /// best under the ranking's lights (tests/invert.rs checks it on the bunny).
+    /// image prefers from the network's best), so the ranking's scores compare. The polish
+    /// scores under the 5-degree light grid, not the ranking's 20-degree one, so the camera
+    /// returned is the best polished, not provably below the network's best under the
+    /// ranking's lights (tests/invert.rs checks it on the bunny).
     pub(super) fn exact_pick(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, refined: &[Vars], unrefined: &[Vars]) -> Result<View> {
         if refined.is_empty() {
             return Err(crate::error::Error::Invalid("exact pick: no refined hypothesis to start from".into()));
@@ -83,9 +85,10 @@ impl Inverter {
     /// Each of `picks` refined by the exact polish once in each of the scene's smoothings
     /// (the smoothing is a nuisance like the light: a camera's score is its best over them,
     /// and a smoothing chosen at an unpolished start can be the wrong one for the camera it
-    /// polishes to); the camera of the lowest polished score.
+    /// polishes to); the camera of the lowest polished score. The scene's own smoothing is
+    /// left as it was.
     pub(super) fn polish_best(&self, gpu: &Gpu, scene: &mut ExactScene, picks: &[View]) -> Result<View> {
-        let mut best: Option<(f64, View)> = None;
+        let (chosen, mut best): (usize, Option<(f64, View)>) = (scene.chosen, None);
         for p in picks {
             for k in 0..scene.smoothings() {
                 scene.chosen = k;
@@ -95,6 +98,7 @@ impl Inverter {
                 }
             }
         }
+        scene.chosen = chosen;
         best.map(|b| b.1).ok_or_else(|| crate::error::Error::Invalid("exact pick: no camera to polish".into()))
     }
 }
