@@ -36,8 +36,8 @@ const POLISH_STEPS: [f64; 4] = [2.0, 1.0, 0.5, 0.25];
 const POLISH_ROUNDS: usize = 6;
 
 /// The known grid as the exact renderer draws it for one target: the grid and its smoothings
-/// on the GPU (one chosen, [`Inverter::choose_smoothing`]), the window around the target's foreground, its
-/// pixels, and the G-buffer the maps are read from ([`SUB`] times the window's larger side,
+/// on the GPU (one chosen, [`Inverter::choose_smoothing`]), the window around the target's
+/// foreground, its pixels, and the G-buffer the maps are read from ([`SUB`] times the window's larger side,
 /// square). Only the window is marched, not the whole frame: a chair at radius 6 covers a
 /// tenth of it, and a search scores ~500 cameras per image. The maps are the unshaded
 /// G-buffer: on lavapipe (Mesa 22.3.6) every dispatch of the reference shading pass leaked
@@ -85,7 +85,7 @@ impl Inverter {
 
     /// Draws `scene`'s maps from whichever of its grids explains its target best from
     /// `view` under its best light of the 20-degree grid.
-    pub(super) fn choose_smoothing(&self, gpu: &Gpu, scene: &mut ExactScene, view: &View) -> Result<()> {
+    fn choose_smoothing(&self, gpu: &Gpu, scene: &mut ExactScene, view: &View) -> Result<()> {
         let mut best = (f64::INFINITY, 0);
         for k in 0..scene.grids.len() {
             scene.chosen = k;
@@ -105,9 +105,20 @@ impl Inverter {
     /// light, no network reading this grid could find it either: a light behind the object
     /// leaves the camera only ambient and rims.
     pub fn light_exact(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, view: &View) -> Result<Light> {
-        let scene = self.exact_scene(gpu, grid, target, view)?;
-        let coarse = self.exact_fit(gpu, &scene, view, &light_grid(POLISH_STEP_DEGREES))?.1;
-        Ok(self.exact_fit(gpu, &scene, view, &lights_around(&coarse, 0.5, 3.0))?.1)
+        self.light_search(gpu, &self.exact_scene(gpu, grid, target, view)?, view)
+    }
+
+    /// [`Inverter::light_exact`] in a scene already built for the same grid and target
+    /// (its smoothing chosen again at `view`), so the grids are not uploaded again.
+    pub(super) fn light_in(&self, gpu: &Gpu, scene: &mut ExactScene, view: &View) -> Result<Light> {
+        self.choose_smoothing(gpu, scene, view)?;
+        self.light_search(gpu, scene, view)
+    }
+
+    /// The light search of [`Inverter::light_exact`] in `scene` as it is.
+    fn light_search(&self, gpu: &Gpu, scene: &ExactScene, view: &View) -> Result<Light> {
+        let coarse = self.exact_fit(gpu, scene, view, &light_grid(POLISH_STEP_DEGREES))?.1;
+        Ok(self.exact_fit(gpu, scene, view, &lights_around(&coarse, 0.5, 3.0))?.1)
     }
 
     /// How well the exact renderer's maps of `grid` explain `target` from each of `views`:
@@ -165,8 +176,8 @@ impl Inverter {
     }
 
     /// `view` moved along its line of sight until the grid's silhouette covers as many
-    /// window pixels (any of its sub-pixels hit) as the target's foreground (area goes as 1 / radius^2; two steps, inside
-    /// the search's radius range). A camera grid at the network's radius ranks badly where
+    /// window pixels (any of its sub-pixels hit) as the target's foreground (area goes as
+    /// 1 / radius^2; two steps, inside the search's radius range). A camera grid at the network's radius ranks badly where
     /// that radius is off: on one real mesh (silla2) the network's best was 11% too far, and
     /// at its radius the grid cells within 5 degrees of the truth scored below cells 20
     /// degrees off; at the true radius they scored best.
@@ -178,7 +189,7 @@ impl Inverter {
             let g = self.march(gpu, scene, &v)?;
             let hit = |y: usize, x: usize| (0..SUB * SUB).any(|k| g[(SUB * y + k / SUB) * side + SUB * x + k % SUB] != 0.0);
             let covered = (0..h * w).filter(|&i| hit(i / w, i % w)).count();
-            if covered == 0 || scene.fg_pixels == 0 {
+            if covered == 0 {
                 break;
             }
             v.radius = (v.radius * (covered as f64 / scene.fg_pixels as f64).sqrt()).clamp(RADIUS.0, RADIUS.1);

@@ -354,11 +354,11 @@ impl Inverter {
             // best at its start; a fresh search of every direction at the polished camera, in
             // the scene chosen there, lands nearer the truth (real meshes: 11.3 -> 9.5
             // degrees median).
-            let v = self.exact_pick(gpu, grid, target, &refined, &pool_views)?;
+            let (v, mut scene) = self.exact_pick(gpu, grid, target, &refined, &pool_views)?;
             best = Vars([v.azimuth, v.elevation, v.radius.ln(), best.0[3], best.0[4]]);
             // At the estimate's own view (its radius through ln and exp), so that
             // `light_exact(estimate.view)` gives this light back.
-            let l = self.light_exact(gpu, grid, target, &best.view())?;
+            let l = self.light_in(gpu, &mut scene, &best.view())?;
             (best.0[3], best.0[4]) = (l.azimuth, l.elevation);
         }
         // A light network then picks the light at that camera, its best of the polish grid

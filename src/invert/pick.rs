@@ -58,7 +58,8 @@ impl Inverter {
     /// scores under the 5-degree light grid, not the ranking's 20-degree one, so the camera
     /// returned is the best polished, not provably below the network's best under the
     /// ranking's lights (tests/invert.rs checks it on the bunny).
-    pub(super) fn exact_pick(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, refined: &[Vars], unrefined: &[Vars]) -> Result<View> {
+    /// Also returns the scene, for the light search at the camera that wins.
+    pub(super) fn exact_pick(&self, gpu: &Gpu, grid: &VoxelGrid, target: &Image, refined: &[Vars], unrefined: &[Vars]) -> Result<(View, ExactScene)> {
         if refined.is_empty() {
             return Err(crate::error::Error::Invalid("exact pick: no refined hypothesis to start from".into()));
         }
@@ -79,7 +80,7 @@ impl Inverter {
                 picks.push(v);
             }
         }
-        self.polish_best(gpu, &mut scene, &picks)
+        Ok((self.polish_best(gpu, &mut scene, &picks)?, scene))
     }
 
     /// Each of `picks` refined by the exact polish once in each of the scene's smoothings
