@@ -26,17 +26,30 @@ fn stage_pos(gid: vec3<u32>) -> vec4<u32> {
     return vec4<u32>(gid.x % w4n, gid.x / w4n, gid.z * p.id + gid.y, u32(gid.x < w4n * p.ih));
 }
 
-@compute @workgroup_size(64)
-fn conv_direct_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let s = stage_pos(gid);
-    if (s.w == 0u) { return; }
+// Texel s (stage_pos) from a row of any width: four scalar loads, zero past the row's end.
+fn stage_texel_of(s: vec4<u32>) -> vec4<f32> {
     let row = (s.z * p.ih + s.y) * p.iw;
     var v = vec4<f32>(0.0);
     for (var k = 0u; k < 4u; k++) {
         let w = 4u * s.x + k;
         if (w < p.iw) { v[k] = src[row + w]; }
     }
-    textureStore(tdst, s.xyz, v);
+    return v;
+}
+
+@compute @workgroup_size(64)
+fn conv_direct_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let s = stage_pos(gid);
+    if (s.w == 0u) { return; }
+    textureStore(tdst, s.xyz, stage_texel_of(s));
+}
+
+// The same texels into a staging buffer (conv_tex.wgsl, staging_pitch; `dst` of conv_fast.wgsl).
+@compute @workgroup_size(64)
+fn conv_direct_stage_buf(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let s = stage_pos(gid);
+    if (s.w == 0u) { return; }
+    dst[staged(s.xyz, staging_pitch((p.iw + 3u) / 4u), p.ih)] = stage_texel_of(s);
 }
 
 @compute @workgroup_size(64)
@@ -46,6 +59,13 @@ fn conv_direct_stage_w4(@builtin(global_invocation_id) gid: vec3<u32>) {
     textureStore(tdst, s.xyz, src4[(s.z * p.ih + s.y) * (p.iw / 4u) + s.x]);
 }
 
+@compute @workgroup_size(64)
+fn conv_direct_stage_w4_buf(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let s = stage_pos(gid);
+    if (s.w == 0u) { return; }
+    dst[staged(s.xyz, staging_pitch(p.iw / 4u), p.ih)] = src4[(s.z * p.ih + s.y) * (p.iw / 4u) + s.x];
+}
+
 // The same copy (iw a multiple of 4) through uniform windows (conv_tex.wgsl's wc0..wc3 and
 // pdst; see src/gpu/window.rs) on CPU adapters: a dispatch stages texels [first, first + len)
 // (texel t = source vec4 t), window k holding texels first + 4096 k.. from index at[k]. llvmpipe
@@ -53,16 +73,31 @@ fn conv_direct_stage_w4(@builtin(global_invocation_id) gid: vec3<u32>) {
 struct StageWin { at: vec4<u32>, first: u32, len: u32, w4n: u32, ih: u32 }
 @group(0) @binding(0) var<uniform> sk: StageWin;
 
-@compute @workgroup_size(64)
-fn conv_direct_stage_window(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
-    if (i >= sk.len) { return; }
+// Texel i of the dispatch and its place in the stage.
+struct StageTexel { at: vec3<u32>, v: vec4<f32> }
+
+fn stage_window_texel(i: u32) -> StageTexel {
     let k = i >> 12u;
     let l = sk.at[k] + (i & 4095u);
     let v = select(select(wc0[l], wc1[l], k == 1u), select(wc2[l], wc3[l], k == 3u), k >= 2u);
     let t = sk.first + i;
     let row = t / sk.w4n;
-    textureStore(pdst, vec3<u32>(t % sk.w4n, row % sk.ih, row / sk.ih), v);
+    return StageTexel(vec3<u32>(t % sk.w4n, row % sk.ih, row / sk.ih), v);
+}
+
+@compute @workgroup_size(64)
+fn conv_direct_stage_window(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x >= sk.len) { return; }
+    let t = stage_window_texel(gid.x);
+    textureStore(pdst, t.at, t.v);
+}
+
+// The same texels into a staging buffer (see staging_pitch).
+@compute @workgroup_size(64)
+fn conv_direct_stage_window_buf(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x >= sk.len) { return; }
+    let t = stage_window_texel(gid.x);
+    pbuf[staged(t.at, staging_pitch(sk.w4n), sk.ih)] = t.v;
 }
 
 // Texel j (W voxels 4j..4j+3) of row zh at depth zd of input channel c of item n in the stage,

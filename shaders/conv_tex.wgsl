@@ -35,10 +35,20 @@ fn tex_pos(n: u32, q: u32, d: u32, h: u32, w: u32) -> vec3<u32> {
 // per lane on llvmpipe).
 @group(0) @binding(2) var tdst: texture_storage_3d<rgba32float, write>;
 
-@compute @workgroup_size(64)
-fn conv_fast_pack_tex(@builtin(global_invocation_id) gid: vec3<u32>) {
+// Texels a row of a staging buffer for a texture w texels wide: the _buf packings below write
+// their texels there in texel order (rows of a multiple of 256 bytes, oh rows a layer), and
+// src/gpu/passes.rs copies the buffer into the texture (its staging_pitch is the same rule),
+// because on lavapipe a vec4 buffer store costs about a third of a texture store. `dst`
+// (conv_fast.wgsl, binding 2) is that buffer.
+fn staging_pitch(w: u32) -> u32 {
+    return (w + 15u) / 16u * 16u;
+}
+
+// Invocation gid's texel and where it goes.
+struct Texel { at: vec3<u32>, v: vec4<f32> }
+
+fn pack_texel(gid: vec3<u32>) -> Texel {
     let hw = gid.x;
-    if (hw >= p.oh * p.ow) { return; }
     let cq = p.cpad / 4u;
     let n = gid.z / cq;
     let c = 4u * (gid.z % cq);
@@ -46,7 +56,21 @@ fn conv_fast_pack_tex(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s = gid.y * p.oh * p.ow + hw;
     let v = vec4<f32>(src_at(n, c, s, s_len, true), src_at(n, c + 1u, s, s_len, true),
                       src_at(n, c + 2u, s, s_len, true), src_at(n, c + 3u, s, s_len, true));
-    textureStore(tdst, tex_pos(n, gid.z % cq, gid.y, hw / p.ow, hw % p.ow), v);
+    return Texel(tex_pos(n, gid.z % cq, gid.y, hw / p.ow, hw % p.ow), v);
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_pack_tex(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x >= p.oh * p.ow) { return; }
+    let t = pack_texel(gid);
+    textureStore(tdst, t.at, t.v);
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_pack_tex_buf(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x >= p.oh * p.ow) { return; }
+    let t = pack_texel(gid);
+    dst[staged(t.at, staging_pitch(p.ow), p.oh)] = t.v;
 }
 
 // The same packing when iw is a multiple of 4: each invocation reads one channel
@@ -62,10 +86,17 @@ fn src_quad(n: u32, c: u32, s4: u32, plane4: u32) -> vec4<f32> {
     return select(vec4<f32>(0.0), v, c < p.ci);
 }
 
-@compute @workgroup_size(64)
-fn conv_fast_pack_tex_w4(@builtin(global_invocation_id) gid: vec3<u32>) {
+// The 4 texels of an invocation (4 voxels along W, each one channel quad) and the first's place.
+struct Texels4 { at: vec3<u32>, t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32>, t3: vec4<f32> }
+
+// Texels of 4 voxels from their 4 channels' vec4s along W.
+fn transpose4(at: vec3<u32>, r0: vec4<f32>, r1: vec4<f32>, r2: vec4<f32>, r3: vec4<f32>) -> Texels4 {
+    return Texels4(at, vec4<f32>(r0.x, r1.x, r2.x, r3.x), vec4<f32>(r0.y, r1.y, r2.y, r3.y),
+                   vec4<f32>(r0.z, r1.z, r2.z, r3.z), vec4<f32>(r0.w, r1.w, r2.w, r3.w));
+}
+
+fn pack_texels4(gid: vec3<u32>) -> Texels4 {
     let w4n = p.ow / 4u;
-    if (gid.x >= p.oh * w4n) { return; }
     let w = (gid.x % w4n) * 4u;
     let h = gid.x / w4n;
     let d = gid.y;
@@ -75,15 +106,40 @@ fn conv_fast_pack_tex_w4(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c = 4u * q;
     let plane4 = p.od * p.oh * w4n;
     let s4 = (d * p.oh + h) * w4n + w / 4u;
-    let r0 = src_quad(n, c, s4, plane4);
-    let r1 = src_quad(n, c + 1u, s4, plane4);
-    let r2 = src_quad(n, c + 2u, s4, plane4);
-    let r3 = src_quad(n, c + 3u, s4, plane4);
-    let at = tex_pos(n, q, d, h, w);
-    textureStore(tdst, at, vec4<f32>(r0.x, r1.x, r2.x, r3.x));
-    textureStore(tdst, at + vec3<u32>(1u, 0u, 0u), vec4<f32>(r0.y, r1.y, r2.y, r3.y));
-    textureStore(tdst, at + vec3<u32>(2u, 0u, 0u), vec4<f32>(r0.z, r1.z, r2.z, r3.z));
-    textureStore(tdst, at + vec3<u32>(3u, 0u, 0u), vec4<f32>(r0.w, r1.w, r2.w, r3.w));
+    return transpose4(tex_pos(n, q, d, h, w), src_quad(n, c, s4, plane4), src_quad(n, c + 1u, s4, plane4),
+                      src_quad(n, c + 2u, s4, plane4), src_quad(n, c + 3u, s4, plane4));
+}
+
+fn store_texels4(t: Texels4) {
+    textureStore(tdst, t.at, t.t0);
+    textureStore(tdst, t.at + vec3<u32>(1u, 0u, 0u), t.t1);
+    textureStore(tdst, t.at + vec3<u32>(2u, 0u, 0u), t.t2);
+    textureStore(tdst, t.at + vec3<u32>(3u, 0u, 0u), t.t3);
+}
+
+// Where texel `at` goes in a staging buffer of `pitch` texels a row and `rows` rows a layer.
+fn staged(at: vec3<u32>, pitch: u32, rows: u32) -> u32 {
+    return (at.z * rows + at.y) * pitch + at.x;
+}
+
+fn stage_texels4(t: Texels4) {
+    let at = staged(t.at, staging_pitch(p.ow), p.oh);
+    dst[at] = t.t0;
+    dst[at + 1u] = t.t1;
+    dst[at + 2u] = t.t2;
+    dst[at + 3u] = t.t3;
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_pack_tex_w4(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x >= p.oh * (p.ow / 4u)) { return; }
+    store_texels4(pack_texels4(gid));
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_pack_tex_w4_buf(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x >= p.oh * (p.ow / 4u)) { return; }
+    stage_texels4(pack_texels4(gid));
 }
 
 // The same packing (iw a multiple of 4) reading x through uniform windows (src/gpu/window.rs:
@@ -100,20 +156,39 @@ struct PackWin { at: vec4<u32>, layer0: u32, row0: u32, len4: u32, w4n: u32, oh:
 @group(0) @binding(4) var<uniform> wc3: array<vec4<f32>, 4096>;
 @group(0) @binding(5) var pdst: texture_storage_3d<rgba32float, write>;
 
-@compute @workgroup_size(64)
-fn conv_fast_pack_tex_window(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
-    if (i >= pk.len4) { return; }
+// The 4 texels of invocation i (4 voxels along W, each channels 4q..4q+3) and the first's
+// place in the texture.
+fn window_texels(i: u32) -> Texels4 {
     let r0 = wc0[pk.at.x + i];
     let r1 = select(vec4<f32>(0.0), wc1[pk.at.y + i], pk.live > 1u);
     let r2 = select(vec4<f32>(0.0), wc2[pk.at.z + i], pk.live > 2u);
     let r3 = select(vec4<f32>(0.0), wc3[pk.at.w + i], pk.live > 3u);
     let row = pk.row0 + i / pk.w4n;
-    let at = vec3<u32>((i % pk.w4n) * 4u, row % pk.oh, pk.layer0 + row / pk.oh);
-    textureStore(pdst, at, vec4<f32>(r0.x, r1.x, r2.x, r3.x));
-    textureStore(pdst, at + vec3<u32>(1u, 0u, 0u), vec4<f32>(r0.y, r1.y, r2.y, r3.y));
-    textureStore(pdst, at + vec3<u32>(2u, 0u, 0u), vec4<f32>(r0.z, r1.z, r2.z, r3.z));
-    textureStore(pdst, at + vec3<u32>(3u, 0u, 0u), vec4<f32>(r0.w, r1.w, r2.w, r3.w));
+    return transpose4(vec3<u32>((i % pk.w4n) * 4u, row % pk.oh, pk.layer0 + row / pk.oh), r0, r1, r2, r3);
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_pack_tex_window(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x >= pk.len4) { return; }
+    let t = window_texels(gid.x);
+    textureStore(pdst, t.at, t.t0);
+    textureStore(pdst, t.at + vec3<u32>(1u, 0u, 0u), t.t1);
+    textureStore(pdst, t.at + vec3<u32>(2u, 0u, 0u), t.t2);
+    textureStore(pdst, t.at + vec3<u32>(3u, 0u, 0u), t.t3);
+}
+
+// The same texels into a staging buffer (see staging_pitch).
+@group(0) @binding(5) var<storage, read_write> pbuf: array<vec4<f32>>;
+
+@compute @workgroup_size(64)
+fn conv_fast_pack_tex_window_buf(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x >= pk.len4) { return; }
+    let t = window_texels(gid.x);
+    let at = staged(t.at, staging_pitch(pk.w4n * 4u), pk.oh);
+    pbuf[at] = t.t0;
+    pbuf[at + 1u] = t.t1;
+    pbuf[at + 2u] = t.t2;
+    pbuf[at + 3u] = t.t3;
 }
 
 // Same parameters as conv_fast_pack_weights; one invocation per texel.
@@ -160,9 +235,21 @@ fn conv_fast_pack_weights_tex_window(@builtin(global_invocation_id) gid: vec3<u3
     let i = lin(gid, nwg);
     if (i >= p.total) { return; }
     let t = weight_texel(i);
-    let v = vec4<f32>(window_weight(t.tap, t.c, t.o), window_weight(t.tap, t.c, t.o + 1u),
-                      window_weight(t.tap, t.c, t.o + 2u), window_weight(t.tap, t.c, t.o + 3u));
-    textureStore(wtdst, t.at, v);
+    textureStore(wtdst, t.at, window_texel(t));
+}
+
+fn window_texel(t: WeightTexel) -> vec4<f32> {
+    return vec4<f32>(window_weight(t.tap, t.c, t.o), window_weight(t.tap, t.c, t.o + 1u),
+                     window_weight(t.tap, t.c, t.o + 2u), window_weight(t.tap, t.c, t.o + 3u));
+}
+
+// The same texels into a staging buffer: the texture's width (co16 * 16) is a whole number of
+// staging rows (staging_pitch), so texel i goes to element i.
+@compute @workgroup_size(64)
+fn conv_fast_pack_weights_tex_window_buf(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = lin(gid, nwg);
+    if (i >= p.total) { return; }
+    pbuf[i] = window_texel(weight_texel(i));
 }
 
 // ---- forward: a subgroup of 8 lanes = 8 outputs along W; each lane 8 rows (H) x 16 channels --

@@ -232,9 +232,62 @@ fn passes(c: &Case, kernel: ConvKernel, seed: u64) -> [Vec<f64>; 3] {
     passes_with(c, kernel, seed, None)
 }
 
+/// The texture family's packings on a CPU adapter write their texels into a staging buffer and
+/// copy it into the texture, splitting the pass (src/gpu/passes.rs); in a pass they cannot
+/// split (one a caller began on its own encoder) they write the texture with texture stores.
+/// Both must give the same bits in all three passes, for every packing: x or dy of a width not
+/// a multiple of 4 (`conv_fast_pack_tex_buf`), of whole vec4s (`_w4_buf`), through uniform
+/// windows (`_window_buf`, planes of 2048 vec4s); the first layer's stage of a width not a
+/// multiple of 4, of whole vec4s, of 64 (x copied in as it lies: no dispatch) and through
+/// windows (26384 vec4s); the weights, through windows in the second case. The split count shows
+/// the copies ran (on a CPU adapter; elsewhere neither path splits).
+#[test]
+fn packings_copied_in_equal_texture_stores() {
+    let with = |c: Case, n: usize, ci: usize, co: usize, input: [usize; 3]| Case { n, ci, co, input, kernel: ConvKernel::Texture, ..c };
+    let first = conv3d([5, 5, 5], [2, 2, 2], Padding::Same);
+    // The weights of the second case a view into a larger buffer, as in the flat parameter
+    // buffer: only there do they fit the windows (see weight_packing_through_uniform_windows).
+    let cases = [
+        (with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 1, 5, 6, [3, 5, 7]), None),
+        (with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 2, 8, 17, [4, 3, 8]), Some(1032)),
+        (with(conv2d([1, 1], [1, 1], Padding::Same), 2, 5, 5, [1, 64, 128]), None),
+        (with(first, 1, 1, 8, [5, 6, 10]), None),
+        (with(first, 2, 1, 8, [3, 5, 12]), None),
+        (with(first, 1, 1, 8, [3, 4, 64]), None),
+        (with(first, 2, 1, 8, [17, 97, 32]), None),
+    ];
+    let cpu = gpu().info.device_type == wgpu::DeviceType::Cpu;
+    for (seed, (c, w_at)) in (340u64..).zip(cases) {
+        let before = gpu().pass_splits();
+        let copied = passes_on(&c, c.kernel, seed, w_at, true);
+        let splits = gpu().pass_splits() - before;
+        let stored = passes_on(&c, c.kernel, seed, w_at, false);
+        assert_eq!(gpu().pass_splits() - before, splits, "{c:?}: a pass the ops cannot split was split");
+        assert_eq!(splits > 0, cpu, "{c:?}: {splits} splits");
+        for (k, what) in ["forward", "dx", "dw"].iter().enumerate() {
+            assert!(copied[k] == stored[k], "{c:?} {what}: copied-in packings differ from texture stores");
+        }
+    }
+}
+
+/// Records `f` into a pass begun on an encoder of its own, which ops cannot split, and runs it.
+fn run_unsplit(f: impl FnOnce(&mut wgpu::ComputePass<'_>) -> rendernet::Result<()>) {
+    let mut enc = gpu().device.create_command_encoder(&Default::default());
+    {
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        f(&mut pass).expect("dispatch");
+    }
+    gpu().submit_and_wait(enc).expect("submit");
+}
+
 /// [`passes`] with the weights, where `w_at` says so, a view at that value offset of a buffer
 /// 16384 values longer than they need.
 fn passes_with(c: &Case, kernel: ConvKernel, seed: u64, w_at: Option<usize>) -> [Vec<f64>; 3] {
+    passes_on(c, kernel, seed, w_at, true)
+}
+
+/// [`passes_with`], in a pass the ops may split (`run`) or may not (`run_unsplit`).
+fn passes_on(c: &Case, kernel: ConvKernel, seed: u64, w_at: Option<usize>, split: bool) -> [Vec<f64>; 3] {
     let g = geom(c);
     let (xs, ws, ys) = (shape(c.d2, c.n, c.ci, g.input), w_shape(c), shape(c.d2, c.n, c.co, g.output));
     let numel = |s: &[usize]| s.iter().product::<usize>();
@@ -252,7 +305,7 @@ fn passes_with(c: &Case, kernel: ConvKernel, seed: u64, w_at: Option<usize>) -> 
     };
     let (tx, tb, tr) = (upload(&xs, &x), upload(&[c.co], &b), upload(&ys, &r));
     let (ty, tdx, tdw) = (zeros(&ys), zeros(&xs), zeros(&ws));
-    run(|p| match c.op {
+    let record = |p: &mut wgpu::ComputePass<'_>| match c.op {
         Op::Conv(op) => {
             op.forward(kernel, gpu(), p, &tx, &tw, Some(&tb), &ty)?;
             op.backward_input(kernel, gpu(), p, &tr, &tw, &tdx)?;
@@ -263,7 +316,8 @@ fn passes_with(c: &Case, kernel: ConvKernel, seed: u64, w_at: Option<usize>) -> 
             op.backward_input(kernel, gpu(), p, &tr, &tw, &tdx)?;
             op.backward_weight(kernel, gpu(), p, &tx, &tr, &tdw)
         }
-    });
+    };
+    if split { run(record) } else { run_unsplit(record) }
     [download(&ty), download(&tdx), download(&tdw)]
 }
 

@@ -42,17 +42,23 @@ pub fn time_calls(gpu: &Gpu, clock: Clock, calls: u32, record: &mut Record) -> R
     let query = (clock == Clock::Gpu).then(|| {
         gpu.device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("bench"), ty: wgpu::QueryType::Timestamp, count: 2 })
     });
-    {
-        let timestamp_writes = query.as_ref().map(|q| wgpu::ComputePassTimestampWrites {
-            query_set: q,
-            beginning_of_pass_write_index: Some(0),
-            end_of_pass_write_index: Some(1),
-        });
-        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("bench"), timestamp_writes });
-        for _ in 0..calls {
-            record(&mut pass)?;
+    // The stamps sit in empty passes of their own around the calls: an op may end the calls'
+    // pass for a copy and begin another (gpu/passes.rs), so that pass's own end is not the end.
+    let stamp = |enc: &mut wgpu::CommandEncoder, i: u32| {
+        if let Some(q) = &query {
+            let at = wgpu::ComputePassTimestampWrites { query_set: q, beginning_of_pass_write_index: Some(i), end_of_pass_write_index: None };
+            enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("bench"), timestamp_writes: Some(at) });
         }
-    }
+    };
+    stamp(&mut enc, 0);
+    let (mut enc, recorded) = gpu.record_passes(enc, |pass| {
+        for _ in 0..calls {
+            record(pass)?;
+        }
+        Ok(())
+    });
+    recorded?;
+    stamp(&mut enc, 1);
     let Some(q) = query else {
         let t = std::time::Instant::now();
         gpu.submit_and_wait(enc)?;

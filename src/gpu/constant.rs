@@ -102,7 +102,8 @@ impl Gpu {
             sample_count: 1,
             dimension: dim,
             format: wgpu::TextureFormat::Rgba32Float,
-            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+            // COPY_DST: the packings copy their texels in on CPU adapters (gpu/passes.rs).
+            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
             view_formats: &[],
         });
         tex.create_view(&Default::default())

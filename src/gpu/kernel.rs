@@ -66,6 +66,7 @@ fn source_of(shader: Shader) -> std::borrow::Cow<'static, str> {
 }
 
 /// One storage binding of a dispatch, in binding order starting at 1.
+#[derive(Clone, Copy)]
 pub enum Arg<'a> {
     /// Read-only storage (`var<storage, read>`).
     R(&'a Tensor),

@@ -7,6 +7,7 @@ mod context;
 mod kept;
 mod kernel;
 mod memo;
+mod passes;
 mod pool;
 mod tensor;
 mod window;
@@ -14,6 +15,7 @@ mod window;
 pub use kernel::{Arg, Shader, grid_1d, MAX_WORKGROUPS_PER_DIM, SHADER_DIR_ENV};
 pub(crate) use kernel::wgsl;
 pub use memo::Memo;
+pub(crate) use passes::staging_pitch;
 pub(crate) use constant::Packing;
 pub(crate) use memo::op_done;
 pub use pool::BufferPool;
@@ -53,6 +55,9 @@ pub struct Gpu {
     /// Whether `ConvKernel::Auto` runs the narrow heads' forward on the unpacked input
     /// (decided once per device by `ops::conv_nchw::wins`).
     pub(crate) conv_nchw: std::sync::OnceLock<bool>,
+    /// Whether the texture packings copy their texels in from a staging buffer rather than
+    /// store them (decided once per device by `ops::conv_operands::copies_win`).
+    pub(crate) pack_copies: std::sync::OnceLock<bool>,
 }
 
 impl Gpu {
@@ -78,6 +83,7 @@ impl Gpu {
             dummy,
             conv_textures: Default::default(),
             conv_nchw: Default::default(),
+            pack_copies: Default::default(),
         })
     }
 
@@ -126,11 +132,9 @@ impl Gpu {
     /// Records `f` into one compute pass of a fresh encoder, submits it and waits.
     /// Convenient for tests and one-off ops; a training step records many ops into one pass.
     pub fn run<T>(&self, f: impl FnOnce(&mut wgpu::ComputePass<'_>) -> Result<T>) -> Result<T> {
-        let mut enc = self.device.create_command_encoder(&Default::default());
-        let out = {
-            let mut pass = enc.begin_compute_pass(&Default::default());
-            f(&mut pass)?
-        };
+        let enc = self.device.create_command_encoder(&Default::default());
+        let (enc, out) = self.record_passes(enc, f);
+        let out = out?;
         self.submit_and_wait(enc)?;
         Ok(out)
     }

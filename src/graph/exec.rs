@@ -385,21 +385,21 @@ impl Executor {
         last_grad: &[usize],
         fusions: &Fusions,
     ) -> Result<u64> {
-        let tensor_bytes;
-        let mut enc = gpu.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = enc.begin_compute_pass(&Default::default());
+        let enc = gpu.device.create_command_encoder(&Default::default());
+        let (mut enc, recorded) = gpu.record_passes(enc, |pass| {
             if let Some(p) = &mut self.profiler {
-                p.begin(gpu, &mut pass);
+                p.begin(gpu, pass);
             }
-            tensor_bytes = self.record(gpu, &mut pass, nodes, bw, loss, last, last_grad, fusions)?;
+            let bytes = self.record(gpu, pass, nodes, bw, loss, last, last_grad, fusions)?;
             if let Some(adam) = adam {
-                self.record_adam(gpu, &mut pass, adam)?;
+                self.record_adam(gpu, pass, adam)?;
                 if let Some(p) = &mut self.profiler {
-                    p.mark(gpu, &mut pass, "adam".into(), "adam");
+                    p.mark(gpu, pass, "adam".into(), "adam");
                 }
             }
-        }
+            Ok(bytes)
+        });
+        let tensor_bytes = recorded?;
         if let Some(p) = &self.profiler {
             p.resolve(&mut enc);
         }

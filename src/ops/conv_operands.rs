@@ -1,10 +1,12 @@
 //! Which family of tiled conv kernels a device runs: buffers or textures ([`Operands`]),
-//! chosen once per machine by timing both on a small conv ([`calibrated`]).
+//! chosen once per machine by timing both on a small conv ([`calibrated`]); and whether the
+//! texture family's packings copy their texels in ([`copies_win`]).
 
 use super::conv::Geometry;
 use super::conv_fast::forward;
 use crate::error::Result;
 use crate::gpu::{Gpu, Tensor};
+use std::cell::Cell;
 
 /// Where the tiled kernels read their packed operands: storage buffers
 /// (`shaders/conv_fast.wgsl`), or textures shared across lanes by subgroup shuffles
@@ -45,6 +47,48 @@ fn measure(gpu: &Gpu) -> Result<bool> {
     let g = Geometry { n: 1, ci: 16, co: 16, input: [16; 3], output: [16; 3], kernel: [3; 3], stride: [1; 3], pad: [1; 3], rank: 5 };
     let ops = [Operands::Buffers, Operands::Textures];
     second_wins(gpu, &g, |k, pass, x, w, y| forward(gpu, pass, &g, x, w, None, y, ops[k]))
+}
+
+thread_local! {
+    /// [`copies_win`]'s answer while it measures (stores, then copies).
+    static FORCED: Cell<Option<bool>> = const { Cell::new(None) };
+}
+
+/// Whether the texture family's packings on a CPU adapter write a staging buffer and copy it
+/// into their texture (src/gpu/passes.rs) rather than store every texel (never elsewhere:
+/// there texture stores are not the dear ones): `RENDERNET_PACK_COPIES`
+/// (`copy` or `store`) if set, else whether copying packed a conv's input faster and to the
+/// same bits (see `measure_copies`), measured once per machine and cached. On an Intel Xeon
+/// (family 6 model 167, Mesa 22.3.6) an rgba32f texture store cost ~130 ns per 8 lanes, a
+/// vec4 buffer store ~40, on an AMD Zen 3 142 and 117 (`bench --operands`): what a copy
+/// saves depends on the CPU.
+pub(crate) fn copies_win(gpu: &Gpu) -> bool {
+    if let Some(forced) = FORCED.with(Cell::get) {
+        return forced;
+    }
+    if gpu.info.device_type != wgpu::DeviceType::Cpu {
+        return false;
+    }
+    *gpu.pack_copies.get_or_init(|| match std::env::var("RENDERNET_PACK_COPIES").as_deref() {
+        Ok("copy") => true,
+        Ok("store") => false,
+        _ => gpu.calibrated_choice("conv-pack-copies", || measure_copies(gpu).unwrap_or(false)),
+    })
+}
+
+/// Whether a 1x1 conv 16->4 on 16x32x32 (its input packed through uniform windows, 65536
+/// texels, and its weights) ran 4 times in a pass faster with its packings copied in than
+/// stored, to the same bits.
+fn measure_copies(gpu: &Gpu) -> Result<bool> {
+    let g = Geometry { n: 1, ci: 16, co: 4, input: [16, 32, 32], output: [16, 32, 32], kernel: [1; 3], stride: [1; 3], pad: [0; 3], rank: 5 };
+    // Textures, not `calibrated`: this may run inside that calibration (its texture kernels
+    // pack), and only the texture family packs into textures.
+    second_wins(gpu, &g, |k, pass, x, w, y| {
+        FORCED.with(|f| f.set(Some(k == 1)));
+        let out = (0..4).try_for_each(|_| forward(gpu, pass, &g, x, w, None, y, Operands::Textures));
+        FORCED.with(|f| f.set(None));
+        out
+    })
 }
 
 /// Whether the second of two ways `run(k, pass, x, w, y)` (k = 0, 1) to compute the forward

@@ -8,7 +8,7 @@ use super::conv::{Geometry, Params};
 use super::conv_fast::{Folded, TEX_SHADER, dispatch, volume};
 use super::conv_window;
 use crate::error::Result;
-use crate::gpu::{Arg, Gpu, Packing, Tensor};
+use crate::gpu::{Arg, Gpu, Packing, Tensor, staging_pitch};
 
 /// `t` ([N, c, sp...]) repacked channels-last as [N, sp..., cpad], channels past `c` zero.
 pub(super) fn pack_input(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, t: &Tensor, n: usize, c: usize, sp: [usize; 3], cpad: usize) -> Result<Tensor> {
@@ -86,13 +86,48 @@ pub(super) fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, 
     if packed || conv_window::pack_x(gpu, pass, g, x, cpad, &view, dim)? {
         return Ok(Packed::Texture(view, dim));
     }
-    let args = [Arg::R(x), Arg::StorageTexture(&view, dim)];
     // Grids: (h, w) or (h, w / 4) along x, depth along y, (item, channel quad) along z.
     let zq = (g.n * cpad / 4) as u32;
     let (entry, per) = if iw % 4 == 0 { ("conv_fast_pack_tex_w4", 4) } else { ("conv_fast_pack_tex", 1) };
     let grid = [(ih * iw / per).div_ceil(64) as u32, id as u32, zq];
-    gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid)?;
+    let buf_entry = if per == 4 { "conv_fast_pack_tex_w4_buf" } else { "conv_fast_pack_tex_buf" };
+    write_texels(
+        gpu,
+        pass,
+        &view,
+        |pass, staging| gpu.dispatch(pass, TEX_SHADER, buf_entry, &p, &[Arg::R(x), Arg::W(staging)], grid),
+        |pass| gpu.dispatch(pass, TEX_SHADER, entry, &p, &[Arg::R(x), Arg::StorageTexture(&view, dim)], grid),
+    )?;
     Ok(Packed::Texture(view, dim))
+}
+
+/// Whether packings into textures copy their texels in (`write_texels`): on a CPU adapter
+/// where that measured faster (`conv_operands::copies_win`), in a pass that can be split.
+fn copies_in(gpu: &Gpu, pass: &wgpu::ComputePass<'_>) -> bool {
+    gpu.info.device_type == wgpu::DeviceType::Cpu && gpu.can_split(pass) && super::conv_operands::copies_win(gpu)
+}
+
+/// Records a packing into the rgba32f texture `view`: `staged` writing its texels into a
+/// staging buffer (in texel order, `staging_pitch` texels a row), which is then copied in,
+/// where that pays and can be done: a CPU adapter where copies measured faster (on an Intel
+/// Xeon a texture store costs ~3x a vec4 buffer store, see `gpu/passes.rs`), a pass that can
+/// be split, and the buffer within one storage binding. Else `stores`, writing the texture
+/// with texture stores.
+pub(super) fn write_texels(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    view: &wgpu::TextureView,
+    staged: impl FnOnce(&mut wgpu::ComputePass<'_>, &Tensor) -> Result<()>,
+    stores: impl FnOnce(&mut wgpu::ComputePass<'_>) -> Result<()>,
+) -> Result<()> {
+    let size = view.texture().size();
+    let floats = staging_pitch(size.width as usize) * (size.height * size.depth_or_array_layers) as usize * 4;
+    if !copies_in(gpu, pass) || floats as u64 * 4 > gpu.limits.max_storage_buffer_binding_size {
+        return stores(pass);
+    }
+    let staging = gpu.scratch(&[floats])?;
+    staged(pass, &staging)?;
+    gpu.copy_to_texture(pass, &staging, view)
 }
 
 /// `x` ([N, C, input...] of `g`) copied into a 3D texture of 4 voxels along W a texel, which
@@ -101,12 +136,28 @@ pub(super) fn stage_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry,
     let [id, ih, iw] = g.input;
     let (view, staged) = gpu.operand_texture(x, b's', bytemuck::bytes_of(p), [iw.div_ceil(4), ih, g.n * g.ci * id], wgpu::TextureDimension::D3);
     let dim = wgpu::TextureViewDimension::D3;
-    if staged || conv_window::stage_x(gpu, pass, g, x, &view, dim)? {
+    if staged {
+        return Ok(view);
+    }
+    // Rows of whole staging rows: the stage's texels are x's vec4s in order, so x itself is
+    // copied in, with no dispatch (the first layer on a 64^3 grid).
+    if iw % 4 == 0 && staging_pitch(iw / 4) == iw / 4 && copies_in(gpu, pass) {
+        gpu.copy_to_texture(pass, x, &view)?;
+        return Ok(view);
+    }
+    if conv_window::stage_x(gpu, pass, g, x, &view, dim)? {
         return Ok(view);
     }
     let entry = if iw % 4 == 0 { "conv_direct_stage_w4" } else { "conv_direct_stage" };
+    let buf_entry = if iw % 4 == 0 { "conv_direct_stage_w4_buf" } else { "conv_direct_stage_buf" };
     let grid = [(iw.div_ceil(4) * ih).div_ceil(64) as u32, id as u32, (g.n * g.ci) as u32];
-    gpu.dispatch(pass, TEX_SHADER, entry, p, &[Arg::R(x), Arg::StorageTexture(&view, dim)], grid)?;
+    write_texels(
+        gpu,
+        pass,
+        &view,
+        |pass, staging| gpu.dispatch(pass, TEX_SHADER, buf_entry, p, &[Arg::R(x), Arg::W(staging)], grid),
+        |pass| gpu.dispatch(pass, TEX_SHADER, entry, p, &[Arg::R(x), Arg::StorageTexture(&view, dim)], grid),
+    )?;
     Ok(view)
 }
 

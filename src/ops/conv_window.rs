@@ -8,23 +8,30 @@
 use super::conv::{Geometry, Params};
 use super::conv_fast::TEX_SHADER;
 use crate::error::Result;
+use super::conv_pack::write_texels;
 use crate::gpu::{Arg, Gpu, Tensor, WINDOW4, align4, grid_1d, window, windows_pay};
 
-/// Records `plan`'s dispatches of `entry`, each binding its windows and then `dst`.
+/// Records `plan`'s dispatches into the texture `dst`: of `entry`, each binding its windows and
+/// then `dst`, or (`conv_pack::write_texels`) of `entry`'s `_buf` twin `staged`, each binding
+/// its windows and then the staging buffer.
+#[allow(clippy::too_many_arguments)]
 fn record<P: bytemuck::Pod>(
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
-    entry: &'static str,
+    (entry, staged): (&'static str, &'static str),
     plan: &Plan<P>,
     dst: &wgpu::TextureView,
     dim: wgpu::TextureViewDimension,
     invocations: impl Fn(&P) -> usize,
 ) -> Result<()> {
-    for (params, windows) in plan {
-        let args: Vec<Arg> = windows.iter().map(Arg::U).chain([Arg::StorageTexture(dst, dim)]).collect();
-        gpu.dispatch(pass, TEX_SHADER, entry, params, &args, grid_1d(invocations(params) as u64, 64)?)?;
-    }
-    Ok(())
+    let each = |pass: &mut wgpu::ComputePass<'_>, entry: &'static str, out: Arg| -> Result<()> {
+        for (params, windows) in plan {
+            let args: Vec<Arg> = windows.iter().map(Arg::U).chain([out]).collect();
+            gpu.dispatch(pass, TEX_SHADER, entry, params, &args, grid_1d(invocations(params) as u64, 64)?)?;
+        }
+        Ok(())
+    };
+    write_texels(gpu, pass, dst, |pass, staging| each(pass, staged, Arg::W(staging)), |pass| each(pass, entry, Arg::StorageTexture(dst, dim)))
 }
 
 /// `conv_fast_pack_tex_window`: `x` ([N, C, input...] of `g`) into the texture `dst` as
@@ -39,7 +46,8 @@ pub(super) fn pack_x(
     dim: wgpu::TextureViewDimension,
 ) -> Result<bool> {
     let Some(plan) = pack_windows(gpu, g, x, cpad)? else { return Ok(false) };
-    record(gpu, pass, "conv_fast_pack_tex_window", &plan, dst, dim, |pk| pk.len4 as usize)?;
+    let entries = ("conv_fast_pack_tex_window", "conv_fast_pack_tex_window_buf");
+    record(gpu, pass, entries, &plan, dst, dim, |pk| pk.len4 as usize)?;
     Ok(true)
 }
 
@@ -54,7 +62,7 @@ pub(super) fn stage_x(
     dim: wgpu::TextureViewDimension,
 ) -> Result<bool> {
     let Some(plan) = stage_windows(gpu, g, x)? else { return Ok(false) };
-    record(gpu, pass, "conv_direct_stage_window", &plan, dst, dim, |sw| sw.len as usize)?;
+    record(gpu, pass, ("conv_direct_stage_window", "conv_direct_stage_window_buf"), &plan, dst, dim, |sw| sw.len as usize)?;
     Ok(true)
 }
 
@@ -71,7 +79,7 @@ pub(super) fn pack_w(
 ) -> Result<bool> {
     let Some((wat, windows)) = weight_windows(gpu, w)? else { return Ok(false) };
     let plan = vec![(Params { wat, total: texels as u32, ..p }, windows)];
-    record(gpu, pass, "conv_fast_pack_weights_tex_window", &plan, dst, dim, |_| texels)?;
+    record(gpu, pass, ("conv_fast_pack_weights_tex_window", "conv_fast_pack_weights_tex_window_buf"), &plan, dst, dim, |_| texels)?;
     Ok(true)
 }
 
