@@ -4,7 +4,7 @@
 //! depends on all of them.
 
 use super::Gpu;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 fn cache_file() -> Option<PathBuf> {
     let base = std::env::var_os("XDG_CACHE_HOME")
@@ -21,20 +21,45 @@ impl Gpu {
         let i = &self.info;
         let cpu = crate::bench::cpu_model().unwrap_or_default();
         let key = format!("{name} {} | {} | {} | {cpu}", i.name, i.driver, i.driver_info).replace(['\n', '='], " ");
-        let path = cache_file();
-        let text = path.as_ref().and_then(|p| std::fs::read_to_string(p).ok()).unwrap_or_default();
-        if let Some(v) = text.lines().find_map(|l| l.split_once('=').filter(|(k, _)| *k == key).map(|(_, v)| v == "yes")) {
-            return v;
+        cached(cache_file().as_deref(), &key, measure)
+    }
+}
+
+/// The answer cached under `key` in the file `path`, or `measure`'s, then written there.
+fn cached(path: Option<&Path>, key: &str, measure: impl FnOnce() -> bool) -> bool {
+    let read = || path.and_then(|p| std::fs::read_to_string(p).ok()).unwrap_or_default();
+    if let Some(v) = read().lines().find_map(|l| l.split_once('=').filter(|(k, _)| *k == key).map(|(_, v)| v == "yes")) {
+        return v;
+    }
+    let v = measure();
+    if let Some(p) = path {
+        // Read after measuring: a measurement can itself calibrate something (the operands'
+        // runs pack, and the packings' own choice is measured then), and its line must stay.
+        let mut lines: Vec<String> = read().lines().filter(|l| l.split_once('=').is_none_or(|(k, _)| k != key)).map(String::from).collect();
+        lines.push(format!("{key}={}", if v { "yes" } else { "no" }));
+        let tmp = p.with_extension("tmp");
+        if p.parent().is_some_and(|d| std::fs::create_dir_all(d).is_ok()) && std::fs::write(&tmp, lines.join("\n") + "\n").is_ok() {
+            let _ = std::fs::rename(&tmp, p);
         }
-        let v = measure();
-        if let Some(p) = path {
-            let mut lines: Vec<String> = text.lines().filter(|l| l.split_once('=').is_none_or(|(k, _)| k != key)).map(String::from).collect();
-            lines.push(format!("{key}={}", if v { "yes" } else { "no" }));
-            let tmp = p.with_extension("tmp");
-            if p.parent().is_some_and(|d| std::fs::create_dir_all(d).is_ok()) && std::fs::write(&tmp, lines.join("\n") + "\n").is_ok() {
-                let _ = std::fs::rename(&tmp, &p);
-            }
-        }
-        v
+    }
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A choice measured while another is being measured keeps its line when the outer one
+    /// writes its own; both answers are read back without measuring again.
+    #[test]
+    fn a_calibration_inside_a_calibration_keeps_both() {
+        let dir = std::env::temp_dir().join(format!("rendernet-calibration-{}", std::process::id()));
+        let path = dir.join("calibration.txt");
+        let _ = std::fs::remove_file(&path);
+        let outer = cached(Some(&path), "outer", || !cached(Some(&path), "inner", || true));
+        assert!(!outer);
+        assert!(cached(Some(&path), "inner", || panic!("inner measured again")));
+        assert!(!cached(Some(&path), "outer", || panic!("outer measured again")));
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }
