@@ -52,6 +52,27 @@ fn gpu_forward(d: &Dims, x: &[f64], poses: &[f64]) -> Vec<f64> {
     gpu_forward_with(d, x, poses, Sampling::Auto)
 }
 
+/// The texture path's packing on a CPU adapter writes the grid's texels into a staging
+/// buffer and copies it into the texture (src/gpu/passes.rs); in a pass that cannot be split
+/// it stores them. Both give the same bits, "quads" (C = 5) and "corners" (C = 1) alike, and
+/// only the first splits its pass (on a CPU adapter; elsewhere neither does).
+#[test]
+fn packing_copied_in_equals_texture_stores() {
+    let cpu = gpu().info.device_type == wgpu::DeviceType::Cpu;
+    for (k, d) in [Dims { n: 2, c: 5, inp: [5, 6, 7], out: [7, 5, 8] }, Dims { n: 3, c: 1, inp: [7, 5, 6], out: [9, 8, 7] }].iter().enumerate() {
+        let (x, poses, _) = case(71 + k as u64, d);
+        let (tx, tp) = (upload(&shape(d, d.inp), &x), upload(&[d.n, 6], &poses));
+        let ys = [zeros(&shape(d, d.out)), zeros(&shape(d, d.out))];
+        let before = gpu().pass_splits();
+        run(|p| resample::forward_with(gpu(), p, &tx, &tp, &ys[0], Sampling::Texture));
+        let splits = gpu().pass_splits() - before;
+        run_unsplit(|p| resample::forward_with(gpu(), p, &tx, &tp, &ys[1], Sampling::Texture));
+        assert_eq!(gpu().pass_splits() - before, splits, "{d:?}: a pass the ops cannot split was split");
+        assert_eq!(splits > 0, cpu, "{d:?}: {splits} splits");
+        assert!(download(&ys[0]) == download(&ys[1]), "{d:?}: copied-in grid differs from texture stores");
+    }
+}
+
 #[test]
 fn forward_matches_reference() {
     // C = 2 and 5 (the texture path's "quads": one and two texels of 4 channels, the second

@@ -281,42 +281,56 @@ fn grid_at(n: u32, c: u32, d: i32, h: i32, w: i32) -> f32 {
 @group(0) @binding(3) var tdst: texture_storage_3d<rgba32float, write>;
 @group(0) @binding(4) var map_dst: texture_storage_2d<rgba32float, write>;
 
-// `one` (a constant at each call: lavapipe inlines the function and drops the other branch,
-// where a branch on p.c ran both sides) picks the layout: "corners" or "quads".
-fn pack_column(gid: vec3<u32>, one: bool) {
+// The texel column of invocation gid: texel (x, y) and voxel (h, w) = texel - 1, item n,
+// first channel c0; `ok` false past the last column.
+struct Column { ok: bool, tx: u32, ty: u32, h: i32, w: i32, n: u32, c0: u32 }
+
+fn column(gid: vec3<u32>) -> Column {
     let pw = p.iw + 2u;
-    if (gid.x >= pw * (p.ih + 2u)) { return; }
     let tx = gid.x % pw;
     let ty = gid.x / pw;
-    // Voxel (h, w) = texel - 1.
-    let h = i32(ty) - 1;
-    let w = i32(tx) - 1;
-    let n = gid.z / quads();
-    let c0 = 4u * (gid.z % quads());
-    // All id + 2 layers of the column: the per-invocation work (divisions, bounds, the map's
-    // masked branch, which lavapipe runs in every invocation) is done once a column; measured
-    // 2x faster than one invocation per texel (README "The resampling through textures").
-    for (var layer = 0u; layer < p.id + 2u; layer++) {
-        let d = i32(layer) - 1;
-        var t: vec4<f32>;
-        if (one) {
-            t = vec4<f32>(grid_at(n, 0u, d, h, w), grid_at(n, 0u, d, h, w + 1), grid_at(n, 0u, d, h + 1, w), grid_at(n, 0u, d, h + 1, w + 1));
-        } else {
-            for (var k = 0u; k < 4u; k++) {
-                t[k] = select(0.0, grid_at(n, min(c0 + k, p.c - 1u), d, h, w), c0 + k < p.c);
-            }
+    return Column(gid.x < pw * (p.ih + 2u), tx, ty, i32(ty) - 1, i32(tx) - 1, gid.z / quads(), 4u * (gid.z % quads()));
+}
+
+// The column's texel at `layer` (depth layer - 1). `one` (a constant at each call: lavapipe
+// inlines the function and drops the other branch, where a branch on p.c ran both sides)
+// picks the layout: "corners" or "quads".
+fn column_texel(c: Column, layer: u32, one: bool) -> vec4<f32> {
+    let d = i32(layer) - 1;
+    var t: vec4<f32>;
+    if (one) {
+        t = vec4<f32>(grid_at(c.n, 0u, d, c.h, c.w), grid_at(c.n, 0u, d, c.h, c.w + 1), grid_at(c.n, 0u, d, c.h + 1, c.w), grid_at(c.n, 0u, d, c.h + 1, c.w + 1));
+    } else {
+        for (var k = 0u; k < 4u; k++) {
+            t[k] = select(0.0, grid_at(c.n, min(c.c0 + k, p.c - 1u), d, c.h, c.w), c.c0 + k < p.c);
         }
-        textureStore(tdst, vec3<u32>(tx, ty, gid.z * (p.id + 2u) + layer), t);
     }
-    if (gid.x == 0u && c0 == 0u) {
+    return t;
+}
+
+// The item's sampling map, by the first invocation of each item.
+fn pack_map(gid: vec3<u32>, c: Column) {
+    if (gid.x == 0u && c.c0 == 0u) {
         // sample_point(x, o) = c_in + M (o - origin) / s with M = R_az^T R_el^T.
-        let x = xform(n);
+        let x = xform(c.n);
         let a = transpose(x.raz) * transpose(x.rel) * (1.0 / x.s);
         let b = x.c_in - a * x.origin;
         for (var k = 0u; k < 3u; k++) {
-            textureStore(map_dst, vec2<u32>(k, n), vec4<f32>(a[k], b[k]));
+            textureStore(map_dst, vec2<u32>(k, c.n), vec4<f32>(a[k], b[k]));
         }
     }
+}
+
+// All id + 2 layers of the column: the per-invocation work (divisions, bounds, the map's
+// masked branch, which lavapipe runs in every invocation) is done once a column; measured
+// 2x faster than one invocation per texel (README "The resampling through textures").
+fn pack_column(gid: vec3<u32>, one: bool) {
+    let c = column(gid);
+    if (!c.ok) { return; }
+    for (var layer = 0u; layer < p.id + 2u; layer++) {
+        textureStore(tdst, vec3<u32>(c.tx, c.ty, gid.z * (p.id + 2u) + layer), column_texel(c, layer, one));
+    }
+    pack_map(gid, c);
 }
 
 @compute @workgroup_size(64)
@@ -327,6 +341,36 @@ fn resample_pack(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(64)
 fn resample_pack1(@builtin(global_invocation_id) gid: vec3<u32>) {
     pack_column(gid, true);
+}
+
+// The same grid texels into a staging buffer in texel order, which src/gpu/passes.rs copies
+// into the texture (on lavapipe a texture store costs ~3x a vec4 buffer store): rows of
+// staging_pitch texels (a multiple of 16, 256 bytes; the same rule as src/gpu/passes.rs),
+// ih + 2 rows a layer. The map is small (3 texels an item) and keeps its texture stores.
+@group(0) @binding(3) var<storage, read_write> gbuf: array<vec4<f32>>;
+
+fn staging_pitch(w: u32) -> u32 {
+    return (w + 15u) / 16u * 16u;
+}
+
+fn pack_column_buf(gid: vec3<u32>, one: bool) {
+    let c = column(gid);
+    if (!c.ok) { return; }
+    let pitch = staging_pitch(p.iw + 2u);
+    for (var layer = 0u; layer < p.id + 2u; layer++) {
+        gbuf[((gid.z * (p.id + 2u) + layer) * (p.ih + 2u) + c.ty) * pitch + c.tx] = column_texel(c, layer, one);
+    }
+    pack_map(gid, c);
+}
+
+@compute @workgroup_size(64)
+fn resample_pack_buf(@builtin(global_invocation_id) gid: vec3<u32>) {
+    pack_column_buf(gid, false);
+}
+
+@compute @workgroup_size(64)
+fn resample_pack1_buf(@builtin(global_invocation_id) gid: vec3<u32>) {
+    pack_column_buf(gid, true);
 }
 
 @group(0) @binding(2) var tsrc: texture_storage_3d<rgba32float, read>;

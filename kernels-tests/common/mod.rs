@@ -140,3 +140,16 @@ pub fn dot(r: &[f64], y: &[f64]) -> f64 {
 pub fn run(f: impl FnOnce(&mut wgpu::ComputePass<'_>) -> rendernet::Result<()>) {
     gpu().run(f).expect("dispatch");
 }
+
+/// Records `f` into a pass begun on an encoder of its own, which ops cannot split (on a CPU
+/// adapter their texture packings then store their texels instead of copying them in:
+/// src/gpu/passes.rs), and runs it.
+#[allow(dead_code)]
+pub fn run_unsplit(f: impl FnOnce(&mut wgpu::ComputePass<'_>) -> rendernet::Result<()>) {
+    let mut enc = gpu().device.create_command_encoder(&Default::default());
+    {
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        f(&mut pass).expect("dispatch");
+    }
+    gpu().submit_and_wait(enc).expect("submit");
+}

@@ -270,16 +270,6 @@ fn packings_copied_in_equal_texture_stores() {
     }
 }
 
-/// Records `f` into a pass begun on an encoder of its own, which ops cannot split, and runs it.
-fn run_unsplit(f: impl FnOnce(&mut wgpu::ComputePass<'_>) -> rendernet::Result<()>) {
-    let mut enc = gpu().device.create_command_encoder(&Default::default());
-    {
-        let mut pass = enc.begin_compute_pass(&Default::default());
-        f(&mut pass).expect("dispatch");
-    }
-    gpu().submit_and_wait(enc).expect("submit");
-}
-
 /// [`passes`] with the weights, where `w_at` says so, a view at that value offset of a buffer
 /// 16384 values longer than they need.
 fn passes_with(c: &Case, kernel: ConvKernel, seed: u64, w_at: Option<usize>) -> [Vec<f64>; 3] {

@@ -186,14 +186,19 @@ impl Packed {
             return Ok(Packed { grid, map });
         }
         let stage = stage(gpu, pass, n, c, [d, h, w], x)?;
-        let args = [
-            Arg::R(pose),
-            Arg::ReadStorageTexture(&stage, wgpu::TextureViewDimension::D3),
-            Arg::StorageTexture(&grid, wgpu::TextureViewDimension::D3),
-            Arg::StorageTexture(&map, wgpu::TextureViewDimension::D2),
-        ];
+        let read = Arg::ReadStorageTexture(&stage, wgpu::TextureViewDimension::D3);
+        let map_arg = Arg::StorageTexture(&map, wgpu::TextureViewDimension::D2);
         let groups = [((w + 2) * (h + 2)).div_ceil(64) as u32, 1, (n * c.div_ceil(4)) as u32];
-        gpu.dispatch(pass, SHADER, entry(c, "resample_pack"), params, &args, groups)?;
+        conv_pack::write_texels(
+            gpu,
+            pass,
+            &grid,
+            |pass, staging| gpu.dispatch(pass, SHADER, entry(c, "resample_pack_buf"), params, &[Arg::R(pose), read, Arg::W(staging), map_arg], groups),
+            |pass| {
+                let args = [Arg::R(pose), read, Arg::StorageTexture(&grid, wgpu::TextureViewDimension::D3), map_arg];
+                gpu.dispatch(pass, SHADER, entry(c, "resample_pack"), params, &args, groups)
+            },
+        )?;
         Ok(Packed { grid, map })
     }
 
@@ -230,6 +235,7 @@ pub fn forward_with(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, x: &Tensor, pos
 fn entry(c: usize, name: &'static str) -> &'static str {
     match (c, name) {
         (1, "resample_pack") => "resample_pack1",
+        (1, "resample_pack_buf") => "resample_pack1_buf",
         (1, "resample_forward_tex") => "resample_forward_tex1",
         (1, "resample_backward_pose_tex") => "resample_backward_pose_tex1",
         _ => name,
