@@ -58,7 +58,7 @@ fn gpu_forward(d: &Dims, x: &[f64], poses: &[f64]) -> Vec<f64> {
 /// only the first splits its pass (on a CPU adapter; elsewhere neither does).
 #[test]
 fn packing_copied_in_equals_texture_stores() {
-    let cpu = gpu().info.device_type == wgpu::DeviceType::Cpu;
+    let cpu = copies_on_this_adapter();
     for (k, d) in [Dims { n: 2, c: 5, inp: [5, 6, 7], out: [7, 5, 8] }, Dims { n: 3, c: 1, inp: [7, 5, 6], out: [9, 8, 7] }].iter().enumerate() {
         let (x, poses, _) = case(71 + k as u64, d);
         let (tx, tp) = (upload(&shape(d, d.inp), &x), upload(&[d.n, 6], &poses));

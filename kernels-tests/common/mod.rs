@@ -18,7 +18,11 @@ pub fn gpu() -> &'static Gpu {
     static GPU: OnceLock<Gpu> = OnceLock::new();
     GPU.get_or_init(|| {
         // SAFETY-free: set before any wgpu use so Mesa does not warn on a missing runtime dir.
-        Gpu::new().unwrap_or_else(|e| panic!("kernel tests need a GPU or lavapipe: {e}"))
+        let gpu = Gpu::new().unwrap_or_else(|e| panic!("kernel tests need a GPU or lavapipe: {e}"));
+        // Packings copy their texels in whatever this machine's calibration would say, so the
+        // copies are what every texture test checks (`run_unsplit` checks the stores).
+        gpu.settle_pack_copies(true);
+        gpu
     })
 }
 
@@ -139,6 +143,14 @@ pub fn dot(r: &[f64], y: &[f64]) -> f64 {
 /// Runs `f` in one compute pass and waits.
 pub fn run(f: impl FnOnce(&mut wgpu::ComputePass<'_>) -> rendernet::Result<()>) {
     gpu().run(f).expect("dispatch");
+}
+
+/// Whether texture packings copy their texels in on the test adapter: a CPU adapter that
+/// runs the texture family (`gpu()` settles the choice to copy there).
+#[allow(dead_code)]
+pub fn copies_on_this_adapter() -> bool {
+    let g = gpu();
+    g.info.device_type == wgpu::DeviceType::Cpu && g.has_subgroups_of_8() && g.reads_rgba32f_storage()
 }
 
 /// Records `f` into a pass begun on an encoder of its own, which ops cannot split (on a CPU

@@ -256,7 +256,7 @@ fn packings_copied_in_equal_texture_stores() {
         (with(first, 1, 1, 8, [3, 4, 64]), None),
         (with(first, 2, 1, 8, [17, 97, 32]), None),
     ];
-    let cpu = gpu().info.device_type == wgpu::DeviceType::Cpu;
+    let cpu = copies_on_this_adapter();
     for (seed, (c, w_at)) in (340u64..).zip(cases) {
         let before = gpu().pass_splits();
         let copied = passes_on(&c, c.kernel, seed, w_at, true);

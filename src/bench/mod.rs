@@ -33,7 +33,8 @@ pub fn time_calls_reusing(gpu: &Gpu, memo: &mut crate::gpu::Memo, clock: Clock, 
     })
 }
 
-/// Times `calls` calls of `record`, all recorded into one pass of one submit, and returns
+/// Times `calls` calls of `record`, all recorded into one submit (one pass, unless a packing
+/// ends it for a copy), and returns
 /// milliseconds per call. Several calls per pass amortise the submit and wait (0.1-0.5 ms
 /// on lavapipe) when `Clock::Wall` is used, and pass begin/end costs with timestamps.
 pub fn time_calls(gpu: &Gpu, clock: Clock, calls: u32, record: &mut Record) -> Result<f64> {

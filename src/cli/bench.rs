@@ -36,7 +36,7 @@ pub struct BenchArgs {
     #[arg(long, default_value = "all")]
     kernel: String,
     /// After the whole-network rows, time every op of one run of each (GPU timestamps between
-    /// ops, inside the run's one pass) and print the time per op kind and the slowest ops:
+    /// ops, inside the run's passes) and print the time per op kind and the slowest ops:
     /// where a forward or a training step spends its time.
     #[arg(long)]
     profile: bool,

@@ -129,8 +129,9 @@ impl Gpu {
         self.features.contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES)
     }
 
-    /// Records `f` into one compute pass of a fresh encoder, submits it and waits.
-    /// Convenient for tests and one-off ops; a training step records many ops into one pass.
+    /// Records `f` into a compute pass of a fresh encoder ([`Gpu::record_passes`]: a texture
+    /// packing may end it for a copy and begin another), submits it and waits. Convenient for
+    /// tests and one-off ops; a training step records many ops into one encoder the same way.
     pub fn run<T>(&self, f: impl FnOnce(&mut wgpu::ComputePass<'_>) -> Result<T>) -> Result<T> {
         let enc = self.device.create_command_encoder(&Default::default());
         let (enc, out) = self.record_passes(enc, f);

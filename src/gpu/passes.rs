@@ -2,7 +2,8 @@
 //! storage-texture store or a copy, and on lavapipe the store is the dear one: an rgba32f
 //! `textureStore` cost ~130 ns per 8 lanes against ~40 for a vec4 storage-buffer store
 //! (Intel Xeon family 6 model 167, Mesa 22.3.6, `rendernet bench --operands`), while
-//! `copy_buffer_to_texture` moves a MiB in ~0.04 ms. So the texture family's packings write a
+//! `copy_buffer_to_texture` moved 2 MiB into an rgba32f texture in ~0.16 ms (README
+//! "Measured: Intel Xeon (family 6 model 167)"). So the texture family's packings write a
 //! buffer in texel order and copy it in ([`Gpu::copy_to_texture`]), which means ending the
 //! pass, copying and beginning the next one inside the same encoder and submit.
 //!
@@ -13,15 +14,26 @@
 //! op then recording its texture stores as before.
 
 use super::{Gpu, Tensor};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use std::cell::{Cell, RefCell};
 
-/// An open recording: its pass's address, its encoder, and a spare encoder whose throwaway
-/// pass stands in while the real one is ended.
+/// An open recording: its pass's address, its encoder, and (from its first split) a spare
+/// encoder whose throwaway passes stand in while the real one is ended.
 struct Open {
     pass: usize,
     enc: wgpu::CommandEncoder,
-    spare: wgpu::CommandEncoder,
+    spare: Option<wgpu::CommandEncoder>,
+}
+
+/// Pops the recording's entry if `f` panics, so an outer recording still finds its own on top.
+struct Unwind;
+
+impl Drop for Unwind {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            OPEN.with(|o| o.borrow_mut().pop());
+        }
+    }
 }
 
 thread_local! {
@@ -44,10 +56,11 @@ impl Gpu {
         f: impl FnOnce(&mut wgpu::ComputePass<'_>) -> Result<T>,
     ) -> (wgpu::CommandEncoder, Result<T>) {
         let mut pass = enc.begin_compute_pass(&Default::default()).forget_lifetime();
-        let spare = self.device.create_command_encoder(&Default::default());
-        OPEN.with(|o| o.borrow_mut().push(Open { pass: address(&pass), enc, spare }));
+        OPEN.with(|o| o.borrow_mut().push(Open { pass: address(&pass), enc, spare: None }));
+        let unwind = Unwind;
         let out = f(&mut pass);
         drop(pass);
+        std::mem::forget(unwind);
         let open = OPEN.with(|o| o.borrow_mut().pop()).expect("record_passes pops what it pushed");
         (open.enc, out)
     }
@@ -66,14 +79,18 @@ impl Gpu {
     /// error (the caller checks first).
     pub(crate) fn copy_to_texture(&self, pass: &mut wgpu::ComputePass<'_>, src: &Tensor, dst: &wgpu::TextureView) -> Result<()> {
         if !self.can_split(pass) {
-            return Err(crate::error::Error::Invalid("copy_to_texture: this pass was not begun by Gpu::record_passes".into()));
+            return Err(Error::Invalid("copy_to_texture: this pass was not begun by Gpu::record_passes".into()));
+        }
+        if src.offset() % 16 != 0 {
+            return Err(Error::Invalid(format!("copy_to_texture: the source starts at byte {}, not a multiple of a texel's 16", src.offset())));
         }
         let tex = dst.texture();
         let size = tex.size();
         OPEN.with(|o| {
             let mut o = o.borrow_mut();
             let open = o.last_mut().expect("can_split found it");
-            let stand_in = open.spare.begin_compute_pass(&Default::default()).forget_lifetime();
+            let spare = open.spare.get_or_insert_with(|| self.device.create_command_encoder(&Default::default()));
+            let stand_in = spare.begin_compute_pass(&Default::default()).forget_lifetime();
             // Ends the real pass: its encoder takes commands again.
             drop(std::mem::replace(pass, stand_in));
             open.enc.copy_buffer_to_texture(
@@ -96,6 +113,14 @@ impl Gpu {
         Ok(())
     }
 
+    /// Settles whether the texture packings on a CPU adapter copy their texels in (`true`) or
+    /// store them, instead of measuring it on first use (the `conv-pack-copies` calibration):
+    /// for tests that must take one path whatever the machine measures. False if the choice
+    /// was already settled the other way.
+    pub fn settle_pack_copies(&self, copies: bool) -> bool {
+        *self.pack_copies.get_or_init(|| copies) == copies
+    }
+
     /// Passes this thread has ended for a copy ([`Gpu::copy_to_texture`]) so far.
     pub fn pass_splits(&self) -> u64 {
         SPLITS.with(|s| s.get())
@@ -106,4 +131,27 @@ impl Gpu {
 /// copies take rows of a multiple of 256 bytes (16 texels).
 pub(crate) fn staging_pitch(width: usize) -> usize {
     width.div_ceil(16) * 16
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::panic::{AssertUnwindSafe, catch_unwind};
+
+    /// Only the innermost pass of `record_passes` can be split, a pass begun elsewhere never,
+    /// and a recording that panics inside another (caught there) leaves the outer one's pass
+    /// splittable again.
+    #[test]
+    fn only_the_innermost_recorded_pass_splits_even_after_a_panic() {
+        let gpu = Gpu::new().unwrap();
+        let enc = || gpu.device.create_command_encoder(&Default::default());
+        let (_, outer) = gpu.record_passes(enc(), |pass| {
+            let (_, inner) = gpu.record_passes(enc(), |inner| Ok(gpu.can_split(inner) && !gpu.can_split(pass)));
+            let caught = catch_unwind(AssertUnwindSafe(|| gpu.record_passes(enc(), |_| -> Result<()> { panic!("inside a recording") })));
+            Ok(inner? && caught.is_err() && gpu.can_split(pass))
+        });
+        assert!(outer.unwrap());
+        let mut own = enc();
+        assert!(!gpu.can_split(&own.begin_compute_pass(&Default::default())));
+    }
 }

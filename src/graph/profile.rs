@@ -1,5 +1,6 @@
 //! Per-op GPU time of an executor run ([`Executor::profile`]): a timestamp after every op,
-//! written inside the run's one compute pass, so the times are those of the real schedule
+//! written inside the run's compute passes (one, unless a packing ends it for a copy), so the
+//! times are those of the real schedule
 //! (same encoder, same scratch reuse), not of ops run one by one.
 //!
 //! lavapipe (Mesa 22.3.6) writes a timestamp at the next point where the pass has to wait,

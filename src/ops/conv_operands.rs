@@ -66,7 +66,8 @@ pub(crate) fn copies_win(gpu: &Gpu) -> bool {
     if let Some(forced) = FORCED.with(Cell::get) {
         return forced;
     }
-    if gpu.info.device_type != wgpu::DeviceType::Cpu {
+    // Only the texture family packs into textures: without it there is nothing to measure.
+    if gpu.info.device_type != wgpu::DeviceType::Cpu || !gpu.has_subgroups_of_8() || !gpu.reads_rgba32f_storage() {
         return false;
     }
     *gpu.pack_copies.get_or_init(|| match std::env::var("RENDERNET_PACK_COPIES").as_deref() {
@@ -77,18 +78,32 @@ pub(crate) fn copies_win(gpu: &Gpu) -> bool {
 }
 
 /// Whether a 1x1 conv 16->4 on 16x32x32 (its input packed through uniform windows, 65536
-/// texels, and its weights) ran 4 times in a pass faster with its packings copied in than
-/// stored, to the same bits.
+/// texels; its small weights are stored either way) ran 4 times in a pass faster with its
+/// packings copied in than stored, to the same bits.
 fn measure_copies(gpu: &Gpu) -> Result<bool> {
     let g = Geometry { n: 1, ci: 16, co: 4, input: [16, 32, 32], output: [16, 32, 32], kernel: [1; 3], stride: [1; 3], pad: [0; 3], rank: 5 };
     // Textures, not `calibrated`: this may run inside that calibration (its texture kernels
     // pack), and only the texture family packs into textures.
     second_wins(gpu, &g, |k, pass, x, w, y| {
-        FORCED.with(|f| f.set(Some(k == 1)));
-        let out = (0..4).try_for_each(|_| forward(gpu, pass, &g, x, w, None, y, Operands::Textures));
-        FORCED.with(|f| f.set(None));
-        out
+        let _forced = Forced::new(k == 1);
+        (0..4).try_for_each(|_| forward(gpu, pass, &g, x, w, None, y, Operands::Textures))
     })
+}
+
+/// [`copies_win`]'s answer while alive (cleared on drop, a panic included).
+struct Forced;
+
+impl Forced {
+    fn new(copies: bool) -> Forced {
+        FORCED.with(|f| f.set(Some(copies)));
+        Forced
+    }
+}
+
+impl Drop for Forced {
+    fn drop(&mut self) {
+        FORCED.with(|f| f.set(None));
+    }
 }
 
 /// Whether the second of two ways `run(k, pass, x, w, y)` (k = 0, 1) to compute the forward

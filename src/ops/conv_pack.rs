@@ -122,7 +122,8 @@ pub(super) fn write_texels(
 ) -> Result<()> {
     let size = view.texture().size();
     let floats = staging_pitch(size.width as usize) * (size.height * size.depth_or_array_layers) as usize * 4;
-    if !copies_in(gpu, pass) || floats as u64 * 4 > gpu.limits.max_storage_buffer_binding_size {
+    let bytes = floats as u64 * 4;
+    if !copies_in(gpu, pass) || bytes > gpu.limits.max_storage_buffer_binding_size || bytes > gpu.limits.max_buffer_size {
         return stores(pass);
     }
     let staging = gpu.scratch(&[floats])?;
@@ -141,7 +142,7 @@ pub(super) fn stage_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry,
     }
     // Rows of whole staging rows: the stage's texels are x's vec4s in order, so x itself is
     // copied in, with no dispatch (the first layer on a 64^3 grid).
-    if iw % 4 == 0 && staging_pitch(iw / 4) == iw / 4 && copies_in(gpu, pass) {
+    if iw % 4 == 0 && staging_pitch(iw / 4) == iw / 4 && x.offset() % 16 == 0 && copies_in(gpu, pass) {
         gpu.copy_to_texture(pass, x, &view)?;
         return Ok(view);
     }
