@@ -81,7 +81,7 @@ impl Gpu {
         if !self.can_split(pass) {
             return Err(Error::Invalid("copy_to_texture: this pass was not begun by Gpu::record_passes".into()));
         }
-        if src.offset() % 16 != 0 {
+        if !src.offset().is_multiple_of(16) {
             return Err(Error::Invalid(format!("copy_to_texture: the source starts at byte {}, not a multiple of a texel's 16", src.offset())));
         }
         let tex = dst.texture();

@@ -142,7 +142,7 @@ pub(super) fn stage_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry,
     }
     // Rows of whole staging rows: the stage's texels are x's vec4s in order, so x itself is
     // copied in, with no dispatch (the first layer on a 64^3 grid).
-    if iw % 4 == 0 && staging_pitch(iw / 4) == iw / 4 && x.offset() % 16 == 0 && copies_in(gpu, pass) {
+    if iw % 4 == 0 && staging_pitch(iw / 4) == iw / 4 && x.offset().is_multiple_of(16) && copies_in(gpu, pass) {
         gpu.copy_to_texture(pass, x, &view)?;
         return Ok(view);
     }
