@@ -1,4 +1,4 @@
-// prepend: conv_fast.wgsl, conv_tex.wgsl, conv_tex_weight.wgsl
+// prepend: conv_fast.wgsl, conv_tex.wgsl, conv_tex_pack.wgsl, conv_tex_weight.wgsl
 // The direct kernels of convs with few input channels (the first layer: 1 -> 8, 5^3, stride 2),
 // which the buffer family runs with kernel taps folded into channels (the texture family did too,
 // until its folded packing proved the slow part: it writes about kh * kw / (sh * sw) texels per
@@ -9,7 +9,7 @@
 // fetched one texel a lane and broadcast by subgroup shuffles, over the texture family's tiles (a
 // subgroup of 8 lanes = 8 outputs along W, 8 rows each) per group of 8 output channels; the weight
 // gradient multiplies them by the lane's own dy. Compiled appended to conv_fast.wgsl,
-// conv_tex.wgsl and conv_tex_weight.wgsl (their Params, bindings, bias4, put_raw, chunk_rows,
+// conv_tex.wgsl, conv_tex_pack.wgsl and conv_tex_weight.wgsl (their Params, bindings, bias4, put_raw, chunk_rows,
 // walk_from, walk_next, dy_quads, and the forward tiles' lane_tile, tile_taps, next_tap, Rows,
 // slide, Acc8, Tile8, tile8, mac_rows8, broadcast8, put_tile8, falpha).
 
@@ -44,7 +44,7 @@ fn conv_direct_stage(@builtin(global_invocation_id) gid: vec3<u32>) {
     textureStore(tdst, s.xyz, stage_texel_of(s));
 }
 
-// The same texels into a staging buffer (conv_tex.wgsl, staging_pitch; `dst` of conv_fast.wgsl).
+// The same texels into a staging buffer (conv_tex_pack.wgsl, staging_pitch; `dst` of conv_fast.wgsl).
 @compute @workgroup_size(64)
 fn conv_direct_stage_buf(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s = stage_pos(gid);
@@ -66,7 +66,7 @@ fn conv_direct_stage_w4_buf(@builtin(global_invocation_id) gid: vec3<u32>) {
     dst[staged(s.xyz, staging_pitch(p.iw / 4u), p.ih)] = src4[(s.z * p.ih + s.y) * (p.iw / 4u) + s.x];
 }
 
-// The same copy (iw a multiple of 4) through uniform windows (conv_tex.wgsl's wc0..wc3 and
+// The same copy (iw a multiple of 4) through uniform windows (conv_tex_pack.wgsl's wc0..wc3 and
 // pdst; see src/gpu/window.rs) on CPU adapters: a dispatch stages texels [first, first + len)
 // (texel t = source vec4 t), window k holding texels first + 4096 k.. from index at[k]. llvmpipe
 // runs all four windows' loads and a select keeps one: still ~4x cheaper than a storage load.

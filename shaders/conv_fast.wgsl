@@ -53,7 +53,7 @@ struct Params {
     // (n * co + c) * ycs + yoff + od * ysd + oh * ysh + ow * ysw (a phase of a larger tensor
     // for strided backward input; the dense layout otherwise).
     ycs: u32, ysd: u32, ysh: u32, ysw: u32, yoff: u32,
-    // conv_fast_pack_weights_tex_window (conv_tex.wgsl): the index of each window's first vec4
+    // conv_fast_pack_weights_tex_window (conv_tex_pack.wgsl): the index of each window's first vec4
     // in its binding.
     wat0: u32, wat1: u32, wat2: u32, wat3: u32,
 }
@@ -125,7 +125,7 @@ fn folded_at(n: u32, k: vec3<u32>, d: u32, h0: i32, w0: i32) -> f32 {
 }
 
 // The next 4 folded channels from counter *k (advanced past them) of destination voxel (n, d)
-// whose folded window starts at (h0, w0); also used by conv_tex.wgsl's texture packing.
+// whose folded window starts at (h0, w0); also used by conv_tex_pack.wgsl's texture packing.
 fn folded_quad(n: u32, k: ptr<function, vec3<u32>>, d: u32, h0: i32, w0: i32) -> vec4<f32> {
     let k0 = *k; let k1 = fold_next(k0); let k2 = fold_next(k1); let k3 = fold_next(k2);
     *k = fold_next(k3);

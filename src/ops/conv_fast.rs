@@ -11,10 +11,11 @@ use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 pub(crate) use super::conv_operands::{Operands, calibrated};
 
 const SHADER: Shader = wgsl!("conv_fast");
-/// The texture family: `conv_tex.wgsl` (packing and forward tiles) and `conv_tex_weight.wgsl`
-/// (weight-gradient tiles) use `conv_fast.wgsl`'s parameters and helpers, and
-/// `conv_direct.wgsl` (the direct kernels of convs with few input channels) all three files'.
-pub(super) const TEX_SHADER: Shader = wgsl!("conv_tex": "conv_fast", "conv_tex", "conv_tex_weight", "conv_direct");
+/// The texture family: `conv_tex.wgsl` (forward tiles), `conv_tex_pack.wgsl` (the packings
+/// into its textures) and `conv_tex_weight.wgsl` (weight-gradient tiles) use
+/// `conv_fast.wgsl`'s parameters and helpers, and `conv_direct.wgsl` (the direct kernels of
+/// convs with few input channels) all four files'.
+pub(super) const TEX_SHADER: Shader = wgsl!("conv_tex": "conv_fast", "conv_tex", "conv_tex_pack", "conv_tex_weight", "conv_direct");
 
 /// The tiled kernels' parameters for dispatch geometry `g` with `cpad` packed channels.
 fn params(g: &Geometry, cpad: usize) -> Params {

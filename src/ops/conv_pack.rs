@@ -101,10 +101,10 @@ pub(super) fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, 
     Ok(Packed::Texture(view, dim))
 }
 
-/// Whether packings into textures copy their texels in (`write_texels`): on a CPU adapter
-/// where that measured faster (`conv_operands::copies_win`), in a pass that can be split.
+/// Whether packings into textures copy their texels in (`write_texels`): where that measured
+/// faster (`conv_operands::copies_win`: CPU adapters only), in a pass that can be split.
 fn copies_in(gpu: &Gpu, pass: &wgpu::ComputePass<'_>) -> bool {
-    gpu.info.device_type == wgpu::DeviceType::Cpu && gpu.can_split(pass) && super::conv_operands::copies_win(gpu)
+    gpu.can_split(pass) && super::conv_operands::copies_win(gpu)
 }
 
 /// Records a packing into the rgba32f texture `view`: `staged` writing its texels into a
