@@ -375,7 +375,8 @@ pub fn run(a: BenchArgs) -> Result<()> {
         println!("cpu:     {}", m.cpu.as_deref().unwrap_or("unknown"));
         println!("FMA ceiling (shaders/bench_fma.wgsl, best of 5): {start:.1} GFLOP/s at the start; each row is divided by");
         println!("the median of the ceilings timed between its own samples (last column, GFLOP/s)");
-        println!("{:<17} {:<34} {:<16} {:<9} {:>10} {:>9} {:>9} {:>9}", "op", "shape", "pass", "kernel", "ms", "GFLOP/s", "ceiling", "its GF/s");
+        println!("the last column counts one call's dispatches / copies into textures (each ends and begins a pass)");
+        println!("{:<17} {:<34} {:<16} {:<9} {:>10} {:>9} {:>9} {:>9} {:>6}", "op", "shape", "pass", "kernel", "ms", "GFLOP/s", "ceiling", "its GF/s", "disp");
     }
     let mut json = Vec::new();
     // Cases of one (op, shape, pass) are sampled in turn, so kernels compared see the same load.
@@ -388,10 +389,14 @@ pub fn run(a: BenchArgs) -> Result<()> {
         // Each case keeps a memo, as a graph does: timed calls reuse scratch and bind groups.
         let mut memos: Vec<Memo> = group.iter().map(|_| Memo::default()).collect();
         let mut calls = Vec::new();
+        // Dispatches and copies (pass splits) of one call: what each costs beside its work.
+        let mut counts = Vec::new();
         for (c, memo) in group.iter_mut().zip(&mut memos) {
             let (g, rec) = (&gpu, &mut c.record);
             bench::time_calls_reusing(&gpu, memo, clock, 1, &mut |p| rec(g, p))?;
+            let before = (gpu.dispatch_count(), gpu.pass_splits());
             let once = bench::time_calls_reusing(&gpu, memo, clock, 1, &mut |p| rec(g, p))?;
+            counts.push((gpu.dispatch_count() - before.0, gpu.pass_splits() - before.1));
             calls.push(bench::calls_for(once, 200.0));
         }
         let mut samples = vec![Vec::new(); group.len()];
@@ -408,12 +413,16 @@ pub fn run(a: BenchArgs) -> Result<()> {
             let ms = bench::median(&samples[k]);
             let gflops = c.flops / (ms * 1e6);
             let pass = c.pass;
+            let (dispatches, copies) = counts[k];
             if a.json {
-                json.push(m.row(c.op, &c.shape, pass, c.kernel, ms, gflops, ceiling));
+                let mut row = m.row(c.op, &c.shape, pass, c.kernel, ms, gflops, ceiling);
+                row["dispatches"] = dispatches.into();
+                row["copies"] = copies.into();
+                json.push(row);
             } else {
                 println!(
-                    "{:<17} {:<34} {:<16} {:<9} {ms:>10.3} {gflops:>9.2} {:>8.1}% {ceiling:>9.1}",
-                    c.op, c.shape, pass, c.kernel, 100.0 * gflops / ceiling
+                    "{:<17} {:<34} {:<16} {:<9} {ms:>10.3} {gflops:>9.2} {:>8.1}% {ceiling:>9.1} {:>6}",
+                    c.op, c.shape, pass, c.kernel, 100.0 * gflops / ceiling, format!("{dispatches}/{copies}")
                 );
             }
         }

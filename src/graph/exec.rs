@@ -501,7 +501,9 @@ impl Executor {
                 super::Op::Narrow(start, _) => Some((n.inputs[0], start)),
                 _ => sigmoid_range(nodes, ranges, k),
             };
-            if let Some((h, start)) = range {
+            if views[k].is_some() && matches!(n.op, super::Op::ConcatAxis0(_)) {
+                // A joint of parameters: its gradient's view made its parts' (`first_grad`).
+            } else if let Some((h, start)) = range {
                 if self.grad_wanted[h.0] || produced_by_bw[h.0] {
                     self.range_backward(gpu, pass, n, h, start, &dy, &mut total).map_err(|e| node_err(&n.name, e))?;
                 }

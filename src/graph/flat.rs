@@ -4,16 +4,50 @@
 //! on lavapipe every dispatch costs tens of microseconds of thread wake-ups whatever it
 //! computes (README "Benchmarks"), 60-odd of them per step for the tiny preset's 30 tensors.
 //! The gaps between views stay zero, which Adam leaves zero.
+//!
+//! Parameters that only a concatenation along axis 0 reads (the Phong heads' weights and
+//! biases, `nn::rendernet`) lie back to back in its order, from an aligned start: their
+//! concatenation is then a view of the buffer ([`Joint`]), made by no dispatch, and its
+//! gradient a view of the gradients' buffer that the parts' gradients are ranges of. The
+//! parts' own views may then start unaligned: only copies read them one by one.
 
-use super::{Graph, Kind, Value};
+use super::{Graph, Kind, Op, Value};
 use crate::error::{Error, Result};
 use crate::gpu::{Gpu, Tensor};
 use std::sync::Arc;
+
+/// A concatenation along axis 0 of parameters nothing else reads, laid out as one view.
+pub(crate) struct Joint {
+    /// The concatenation's output.
+    pub(crate) output: Value,
+    /// Its parameters, in order.
+    pub(crate) parts: Vec<Value>,
+    /// Byte offset of the first part, the whole's start.
+    offset: u64,
+}
+
+/// The concatenations of `graph` that [`Joint`] lays out as views: along axis 0, of distinct
+/// parameters that no other node reads (nor this one twice).
+fn joints(graph: &Graph) -> Vec<Joint> {
+    let mut reads = vec![0usize; graph.values.len()];
+    for n in &graph.nodes {
+        n.inputs.iter().for_each(|i| reads[i.0] += 1);
+    }
+    let sole_param = |v: &Value| matches!(graph.values[v.0].kind, Kind::Param(_)) && reads[v.0] == 1;
+    graph
+        .nodes
+        .iter()
+        .filter(|n| matches!(n.op, Op::ConcatAxis0(_)) && n.inputs.iter().all(sole_param))
+        .map(|n| Joint { output: n.output, parts: n.inputs.clone(), offset: 0 })
+        .collect()
+}
 
 /// The flat buffers and where each parameter lies in them.
 pub(crate) struct Flat {
     /// Byte offset of each parameter's view, by value index (`None` for other values).
     offsets: Vec<Option<u64>>,
+    /// The concatenations laid out as views.
+    joints: Vec<Joint>,
     /// Bytes of each buffer: a multiple of 16, so the whole buffers read as vec4s.
     bytes: u64,
     params: Arc<wgpu::Buffer>,
@@ -29,10 +63,25 @@ impl Flat {
         // view of a multiple of 4 values reads as vec4s.
         let align = u64::from(gpu.limits.min_storage_buffer_offset_alignment).max(16);
         let mut offsets = vec![None; graph.values.len()];
+        let mut joints = joints(graph);
+        let size = |v: Value| graph.values[v.0].shape.iter().product::<usize>() as u64 * 4;
         let mut bytes = 0u64;
         for v in graph.params() {
-            offsets[v.0] = Some(bytes);
-            bytes += (graph.values[v.0].shape.iter().product::<usize>() as u64 * 4).div_ceil(align) * align;
+            if offsets[v.0].is_some() {
+                continue; // a joint's part, placed with its first
+            }
+            let parts = match joints.iter_mut().find(|j| j.parts.contains(&v)) {
+                Some(j) => {
+                    j.offset = bytes;
+                    j.parts.clone()
+                }
+                None => vec![v],
+            };
+            for p in parts {
+                offsets[p.0] = Some(bytes);
+                bytes += size(p);
+            }
+            bytes = bytes.div_ceil(align) * align;
         }
         // A graph without parameters still gets a (tiny) buffer so every path is the same.
         let bytes = bytes.max(16);
@@ -44,7 +93,7 @@ impl Flat {
             data[at..at + vals.len()].copy_from_slice(&vals);
         }
         let params = Tensor::from_slice(gpu, &[data.len()], &data)?.into_buffer();
-        let flat = Flat { offsets, bytes, params, grads: None, moments: None };
+        let flat = Flat { offsets, joints, bytes, params, grads: None, moments: None };
         let views = (0..graph.values.len())
             .map(|i| flat.view(&flat.params, graph, Value(i)).transpose())
             .collect::<Result<Vec<_>>>()?;
@@ -61,6 +110,48 @@ impl Flat {
         self.offsets[v.0].map(|at| Tensor::view(buffer.clone(), at, &graph.values[v.0].shape))
     }
 
+    /// The joint whose output is `v`, if `v` is laid out as one ([`Joint`]).
+    pub(crate) fn joint(&self, v: Value) -> Option<&Joint> {
+        self.joints.iter().find(|j| j.output == v)
+    }
+
+    /// The joint that parameter `v` is a part of.
+    pub(crate) fn joint_of(&self, v: Value) -> Option<&Joint> {
+        self.joints.iter().find(|j| j.parts.contains(&v))
+    }
+
+    /// The joint output `v`'s view of `buffer`.
+    fn joint_view(&self, buffer: &Arc<wgpu::Buffer>, graph: &Graph, v: Value) -> Result<Tensor> {
+        let at = self.joint(v).ok_or_else(|| internal(graph, v))?.offset;
+        Tensor::view(buffer.clone(), at, &graph.values[v.0].shape)
+    }
+
+    /// The joint output `v`'s gradient: its view of the gradients' buffer, which its parts'
+    /// gradients are ranges of.
+    pub(crate) fn joint_grad(&mut self, gpu: &Gpu, graph: &Graph, v: Value) -> Result<Tensor> {
+        let g = self.grad_buffer(gpu)?;
+        self.joint_view(&g, graph, v)
+    }
+
+    /// The joint output `v`'s views of the parameters, gradients and both Adam moments (the
+    /// last three buffers made, zeroed, on first use).
+    pub(crate) fn joint_views(&mut self, gpu: &Gpu, graph: &Graph, v: Value) -> Result<[Tensor; 4]> {
+        let g = self.joint_grad(gpu, graph, v)?;
+        if self.moments.is_none() {
+            self.moments = Some((self.zeroed(gpu)?, self.zeroed(gpu)?));
+        }
+        let (m, s) = self.moments.clone().expect("just made");
+        Ok([self.joint_view(&self.params, graph, v)?, g, self.joint_view(&m, graph, v)?, self.joint_view(&s, graph, v)?])
+    }
+
+    /// The buffer of the gradients (made, zeroed, on first use).
+    fn grad_buffer(&mut self, gpu: &Gpu) -> Result<Arc<wgpu::Buffer>> {
+        if self.grads.is_none() {
+            self.grads = Some(self.zeroed(gpu)?);
+        }
+        Ok(self.grads.clone().expect("just made"))
+    }
+
     /// A zeroed buffer the size of the parameters'.
     fn zeroed(&self, gpu: &Gpu) -> Result<Arc<wgpu::Buffer>> {
         Ok(Tensor::zeros(gpu, &[(self.bytes / 4) as usize])?.into_buffer())
@@ -68,10 +159,7 @@ impl Flat {
 
     /// Parameter `v`'s gradient tensor (a view; the buffer is made, zeroed, on first use).
     pub(crate) fn grad(&mut self, gpu: &Gpu, graph: &Graph, v: Value) -> Result<Tensor> {
-        if self.grads.is_none() {
-            self.grads = Some(self.zeroed(gpu)?);
-        }
-        let g = self.grads.clone().expect("just made");
+        let g = self.grad_buffer(gpu)?;
         self.view(&g, graph, v).ok_or_else(|| internal(graph, v))?
     }
 

@@ -59,11 +59,17 @@ impl Executor {
     /// a copy: the Phong heads' three channel ranges cost three dispatches (3% of the tiny
     /// forward on lavapipe) before. The input must then live as long as the view
     /// ([`Executor::fusions`] extends its last use).
+    /// A concatenation of parameters laid out back to back (`flat::Joint`) is likewise a
+    /// view, at offset 0 of its first part: the heads' weights and biases took six dispatches
+    /// of every forward, six more of every backward.
     fn narrow_views(&self, gpu: &Gpu, nodes: &[Node]) -> Vec<Option<u64>> {
         let align = u64::from(gpu.limits.min_storage_buffer_offset_alignment).max(16);
         nodes
             .iter()
             .map(|n| {
+                if matches!(n.op, Op::ConcatAxis0(_)) {
+                    return self.flat.joint(n.output).map(|_| 0);
+                }
                 let Op::Narrow(start, _) = n.op else { return None };
                 let x = &self.graph.values[n.inputs[0].0].shape;
                 let offset = (start * x[2..].iter().product::<usize>() * 4) as u64;
@@ -104,9 +110,20 @@ impl Executor {
     /// The tensor of `v`'s first gradient, which later contributions are added to: in the flat
     /// gradient buffer for a parameter (see `Flat`), from the pool otherwise; its bytes go to
     /// `total`.
+    /// A joint of parameters' output (`flat::Joint`) gets its view of the flat gradients, and
+    /// its parts their ranges of it: its backward then has nothing to copy.
     pub(super) fn first_grad(&mut self, gpu: &Gpu, v: Value, total: &mut u64) -> Result<Tensor> {
         let shape = self.graph.values[v.0].shape.clone();
-        let t = if matches!(self.graph.values[v.0].kind, Kind::Param(_)) { self.flat.grad(gpu, &self.graph, v)? } else { self.pool.tensor(gpu, &shape)? };
+        let t = if matches!(self.graph.values[v.0].kind, Kind::Param(_)) {
+            self.flat.grad(gpu, &self.graph, v)?
+        } else if let Some(parts) = self.flat.joint(v).map(|j| j.parts.clone()) {
+            for p in parts {
+                self.grads[p.0] = Some(self.flat.grad(gpu, &self.graph, p)?);
+            }
+            self.flat.joint_grad(gpu, &self.graph, v)?
+        } else {
+            self.pool.tensor(gpu, &shape)?
+        };
         *total += bytes(&shape);
         self.grads[v.0] = Some(t.clone());
         Ok(t)

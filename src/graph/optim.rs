@@ -33,7 +33,12 @@ impl Executor {
             };
             params.iter().find(|v| self.grads[v.0].as_ref().is_some_and(bad_in)).map(|v| self.graph.info(*v).name.clone())
         } else {
-            (1..flags.len()).find(|&k| flags[k] != 0.0).map(|k| self.graph.info(params[k - 1]).name.clone())
+            // A joint's parts share its first part's flag.
+            let name = |v: Value| match self.flat.joint_of(v) {
+                Some(j) => j.parts.iter().map(|p| self.graph.info(*p).name.clone()).collect::<Vec<_>>().join("' or '"),
+                None => self.graph.info(v).name.clone(),
+            };
+            (1..flags.len()).find(|&k| flags[k] != 0.0).map(|k| name(params[k - 1]))
         };
         Err(Error::Invalid(format!(
             "step {}: the gradient of '{}' holds NaN or Inf; the update was skipped and the weights are unchanged",
@@ -72,15 +77,24 @@ impl Executor {
             ops::finite::any(gpu, pass, &flags, chunks)?;
             adam.step_guarded(gpu, pass, t, &p, &g, &m, &s, Some(&flags))?;
         } else {
+            // Each parameter on its own views, except a joint's parts (flat.rs), which may
+            // start unaligned: those on the joint's, flagged at its first part.
+            let mut units = Vec::new();
             for (k, v) in params.iter().enumerate() {
-                if let Some(g) = self.grads[v.0].as_ref() {
-                    ops::finite::check(gpu, pass, g, &flags, k + 1)?;
-                }
+                let Some(g) = self.grads[v.0].clone() else { continue };
+                let unit = match self.flat.joint_of(*v).map(|j| (j.output, j.parts[0])) {
+                    Some((_, first)) if first != *v => continue,
+                    Some((joint, _)) => self.flat.joint_views(gpu, &self.graph, joint)?,
+                    None => {
+                        let (m, s) = self.adam_state[v.0].clone().expect("made above");
+                        [self.values[v.0].clone().expect("params are always allocated"), g, m, s]
+                    }
+                };
+                ops::finite::check(gpu, pass, &unit[1], &flags, k + 1)?;
+                units.push(unit);
             }
             ops::finite::any(gpu, pass, &flags, params.len())?;
-            for v in params {
-                let (Some(g), Some((m, s))) = (self.grads[v.0].as_ref(), self.adam_state[v.0].as_ref()) else { continue };
-                let p = self.values[v.0].as_ref().expect("params are always allocated");
+            for [p, g, m, s] in &units {
                 adam.step_guarded(gpu, pass, t, p, g, m, s, Some(&flags))?;
             }
         }
