@@ -154,18 +154,19 @@ fn f32v(v: &[f64]) -> Vec<f32> {
 // gradient and the parts after two Adam steps equal to the bit; a forward makes 6 dispatches
 // fewer (the copies), and a backward 6 more fewer. The biases' parts (3, 2 and 1 floats) start
 // unaligned. With a spare parameter that gets no gradient, Adam takes each parameter's own
-// views, and a joint's: the same values again.
+// views, and a joint's: the same values again; and with the parts declared in reverse.
 #[test]
 fn parameters_concatenated_along_axis_0_are_one_view_with_identical_values_and_gradients() {
     use rendernet::ops::conv::{Conv, Padding};
     let (h, w, sizes) = (6usize, 9usize, [3usize, 2, 1]);
-    let build = |copies: bool, spare: bool| {
+    let build = |copies: bool, spare: bool, reversed: bool| {
         let mut g = Graph::new();
         let x = g.input("x", &[1, 5, h, w]).unwrap();
-        let mut parts = (Vec::new(), Vec::new());
-        for (k, &o) in sizes.iter().enumerate() {
-            parts.0.push(g.param(&format!("p{k}.weight"), &[o, 5, 3, 3], Init::Xavier).unwrap());
-            parts.1.push(g.param(&format!("p{k}.bias"), &[o], Init::Constant(0.1 * k as f32 - 0.1)).unwrap());
+        let mut parts = (vec![x; 3], vec![x; 3]);
+        // Declared in the concatenation's order or the reverse: the layout follows the former.
+        for k in if reversed { [2, 1, 0] } else { [0, 1, 2] } {
+            parts.0[k] = g.param(&format!("p{k}.weight"), &[sizes[k], 5, 3, 3], Init::Xavier).unwrap();
+            parts.1[k] = g.param(&format!("p{k}.bias"), &[sizes[k]], Init::Constant(0.1 * k as f32 - 0.1)).unwrap();
         }
         if spare {
             g.param("spare", &[4], Init::Constant(1.0)).unwrap();
@@ -183,8 +184,8 @@ fn parameters_concatenated_along_axis_0_are_one_view_with_identical_values_and_g
         let params: Vec<Value> = parts.0.iter().chain(&parts.1).copied().collect();
         (g, x, t, y, loss, params)
     };
-    let run = |copies: bool, spare: bool| {
-        let (g, x, t, y, loss, params) = build(copies, spare);
+    let run = |copies: bool, spare: bool, reversed: bool| {
+        let (g, x, t, y, loss, params) = build(copies, spare, reversed);
         let mut ex = Executor::new(gpu(), g, 7).unwrap();
         ex.feed(gpu(), x, &f32v(&Rng(8).vec(5 * h * w, -1.0, 1.0))).unwrap();
         ex.feed(gpu(), t, &f32v(&Rng(9).vec(6 * h * w, 0.0, 1.0))).unwrap();
@@ -199,10 +200,34 @@ fn parameters_concatenated_along_axis_0_are_one_view_with_identical_values_and_g
         got.extend(params.iter().map(|&p| ex.read(gpu(), p).unwrap()));
         (got, fw, bw)
     };
-    for spare in [false, true] {
-        let ((joint, fw_j, bw_j), (copied, fw_c, bw_c)) = (run(false, spare), run(true, spare));
-        assert_eq!(joint, copied, "spare parameter {spare}: joints against copies");
+    for (spare, reversed) in [(false, false), (true, false), (false, true)] {
+        let ((joint, fw_j, bw_j), (copied, fw_c, bw_c)) = (run(false, spare, reversed), run(true, spare, reversed));
+        let case = format!("spare parameter {spare}, declared in reverse {reversed}");
+        assert_eq!(joint, copied, "{case}: joints against copies");
         // The copies' graph also runs its two unused sigmoids in a forward.
-        assert_eq!((fw_c - fw_j, bw_c - bw_j), (6 + 2, 12 + 2), "spare parameter {spare}: dispatches");
+        assert_eq!((fw_c - fw_j, bw_c - bw_j), (6 + 2, 12 + 2), "{case}: dispatches");
     }
+    // Only the parts that want a gradient get one, as when the concatenation copied.
+    let (g, _, _, _, loss, params) = build(false, false, false);
+    let mut ex = Executor::new(gpu(), g, 7).unwrap();
+    ex.freeze_params();
+    ex.want_grad(params[0]);
+    ex.backward(gpu(), loss).unwrap();
+    assert!(ex.grad(gpu(), params[0]).is_ok());
+    assert!(ex.grad(gpu(), params[1]).is_err(), "a frozen part has no gradient");
+}
+
+// A joint's part may start unaligned, and a resize-convolution's projection binds its weight:
+// the executor refuses the pair with a clear error instead of a binding failure.
+#[test]
+fn a_joint_part_cannot_be_a_resize_convolution() {
+    let mut g = Graph::new();
+    let a = g.param("a.weight", &[1, 2, 4, 4], Init::Xavier).unwrap();
+    let b = g.param("b.weight", &[2, 2, 4, 4], Init::Xavier).unwrap();
+    g.apply("w", Op::ConcatAxis0(vec![1, 2]), &[a, b]).unwrap();
+    let lone = g.param("lone.weight", &[1, 2, 4, 4], Init::Xavier).unwrap();
+    let mut ex = Executor::new(gpu(), g, 1).unwrap();
+    let e = ex.keep_resize_conv(gpu(), a).unwrap_err().to_string();
+    assert!(e.contains("'a.weight'") && e.contains("concatenation"), "{e}");
+    ex.keep_resize_conv(gpu(), lone).unwrap();
 }

@@ -208,6 +208,10 @@ impl Executor {
         if !matches!(info.kind, Kind::Param(_)) || info.shape.len() != 4 || info.shape[2..] != [4, 4] {
             return Err(Error::Invalid(format!("'{}' {:?} is not a [Cin, Cout, 4, 4] parameter", info.name, info.shape)));
         }
+        // The projection binds the weight itself: a joint's part may start unaligned (flat.rs).
+        if self.flat.joint_of(v).is_some() {
+            return Err(Error::Invalid(format!("'{}' is a part of a concatenation laid out as one view; a resize-convolution's weight cannot be", info.name)));
+        }
         if self.projector.is_none() {
             self.projector = Some(ops::resize_conv::projector(gpu)?);
         }

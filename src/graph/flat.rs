@@ -9,7 +9,9 @@
 //! biases, `nn::rendernet`) lie back to back in its order, from an aligned start: their
 //! concatenation is then a view of the buffer ([`Joint`]), made by no dispatch, and its
 //! gradient a view of the gradients' buffer that the parts' gradients are ranges of. The
-//! parts' own views may then start unaligned: only copies read them one by one.
+//! parts' own views may then start unaligned: only copies read them one by one. Being a view,
+//! a kept concatenation reads what the parameters hold when it is read (after a training
+//! step's Adam, the updated values).
 
 use super::{Graph, Kind, Op, Value};
 use crate::error::{Error, Result};

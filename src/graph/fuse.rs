@@ -111,13 +111,13 @@ impl Executor {
     /// gradient buffer for a parameter (see `Flat`), from the pool otherwise; its bytes go to
     /// `total`.
     /// A joint of parameters' output (`flat::Joint`) gets its view of the flat gradients, and
-    /// its parts their ranges of it: its backward then has nothing to copy.
+    /// its parts that want one their ranges of it: its backward then has nothing to copy.
     pub(super) fn first_grad(&mut self, gpu: &Gpu, v: Value, total: &mut u64) -> Result<Tensor> {
         let shape = self.graph.values[v.0].shape.clone();
         let t = if matches!(self.graph.values[v.0].kind, Kind::Param(_)) {
             self.flat.grad(gpu, &self.graph, v)?
         } else if let Some(parts) = self.flat.joint(v).map(|j| j.parts.clone()) {
-            for p in parts {
+            for p in parts.into_iter().filter(|p| self.grad_wanted[p.0]) {
                 self.grads[p.0] = Some(self.flat.grad(gpu, &self.graph, p)?);
             }
             self.flat.joint_grad(gpu, &self.graph, v)?

@@ -78,13 +78,15 @@ impl Executor {
             adam.step_guarded(gpu, pass, t, &p, &g, &m, &s, Some(&flags))?;
         } else {
             // Each parameter on its own views, except a joint's parts (flat.rs), which may
-            // start unaligned: those on the joint's, flagged at its first part.
+            // start unaligned: those on the joint's, flagged at its first part, and only
+            // when every part has a gradient (they move together or not at all).
             let mut units = Vec::new();
             for (k, v) in params.iter().enumerate() {
                 let Some(g) = self.grads[v.0].clone() else { continue };
-                let unit = match self.flat.joint_of(*v).map(|j| (j.output, j.parts[0])) {
-                    Some((_, first)) if first != *v => continue,
-                    Some((joint, _)) => self.flat.joint_views(gpu, &self.graph, joint)?,
+                let joint = self.flat.joint_of(*v).map(|j| (j.output, j.parts[0], j.parts.iter().all(|p| self.grads[p.0].is_some())));
+                let unit = match joint {
+                    Some((_, first, all)) if first != *v || !all => continue,
+                    Some((joint, ..)) => self.flat.joint_views(gpu, &self.graph, joint)?,
                     None => {
                         let (m, s) = self.adam_state[v.0].clone().expect("made above");
                         [self.values[v.0].clone().expect("params are always allocated"), g, m, s]
