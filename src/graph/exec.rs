@@ -199,28 +199,6 @@ impl Executor {
         self.reuse = reuse;
     }
 
-    /// Keeps the 4x4 transposed-conv weight `v` (`[Cin, Cout, 4, 4]`) a resize-convolution:
-    /// every training step projects it back onto that subspace right after Adam, on the GPU
-    /// and in the step's own submit (see [`crate::graph::resize_conv`]). The weight is taken
-    /// to be one already (`Init::XavierUpsample`, or a checkpoint of such a run).
-    pub fn keep_resize_conv(&mut self, gpu: &Gpu, v: Value) -> Result<()> {
-        let info = self.graph.info(v);
-        if !matches!(info.kind, Kind::Param(_)) || info.shape.len() != 4 || info.shape[2..] != [4, 4] {
-            return Err(Error::Invalid(format!("'{}' {:?} is not a [Cin, Cout, 4, 4] parameter", info.name, info.shape)));
-        }
-        // The projection binds the weight itself: a joint's part may start unaligned (flat.rs).
-        if self.flat.joint_of(v).is_some() {
-            return Err(Error::Invalid(format!("'{}' is a part of a concatenation laid out as one view; a resize-convolution's weight cannot be", info.name)));
-        }
-        if self.projector.is_none() {
-            self.projector = Some(ops::resize_conv::projector(gpu)?);
-        }
-        if !self.resize_convs.contains(&v) {
-            self.resize_convs.push(v);
-        }
-        Ok(())
-    }
-
     /// Reads a value: an input, a parameter, or a node output marked with `keep`.
     pub fn read(&self, gpu: &Gpu, v: Value) -> Result<Vec<f32>> {
         let name = &self.graph.info(v).name;

@@ -22,10 +22,8 @@ use std::sync::Arc;
 pub(crate) struct Joint {
     /// The concatenation's output.
     pub(crate) output: Value,
-    /// Its parameters, in order.
+    /// Its parameters, in order; the first one's offset is the whole's.
     pub(crate) parts: Vec<Value>,
-    /// Byte offset of the first part, the whole's start.
-    offset: u64,
 }
 
 /// The concatenations of `graph` that [`Joint`] lays out as views: along axis 0, of distinct
@@ -40,7 +38,7 @@ fn joints(graph: &Graph) -> Vec<Joint> {
         .nodes
         .iter()
         .filter(|n| matches!(n.op, Op::ConcatAxis0(_)) && n.inputs.iter().all(sole_param))
-        .map(|n| Joint { output: n.output, parts: n.inputs.clone(), offset: 0 })
+        .map(|n| Joint { output: n.output, parts: n.inputs.clone() })
         .collect()
 }
 
@@ -65,20 +63,14 @@ impl Flat {
         // view of a multiple of 4 values reads as vec4s.
         let align = u64::from(gpu.limits.min_storage_buffer_offset_alignment).max(16);
         let mut offsets = vec![None; graph.values.len()];
-        let mut joints = joints(graph);
+        let joints = joints(graph);
         let size = |v: Value| graph.values[v.0].shape.iter().product::<usize>() as u64 * 4;
         let mut bytes = 0u64;
         for v in graph.params() {
             if offsets[v.0].is_some() {
                 continue; // a joint's part, placed with its first
             }
-            let parts = match joints.iter_mut().find(|j| j.parts.contains(&v)) {
-                Some(j) => {
-                    j.offset = bytes;
-                    j.parts.clone()
-                }
-                None => vec![v],
-            };
+            let parts = joints.iter().find(|j| j.parts.contains(&v)).map_or_else(|| vec![v], |j| j.parts.clone());
             for p in parts {
                 offsets[p.0] = Some(bytes);
                 bytes += size(p);
@@ -124,7 +116,7 @@ impl Flat {
 
     /// The joint output `v`'s view of `buffer`.
     fn joint_view(&self, buffer: &Arc<wgpu::Buffer>, graph: &Graph, v: Value) -> Result<Tensor> {
-        let at = self.joint(v).ok_or_else(|| internal(graph, v))?.offset;
+        let at = self.joint(v).and_then(|j| self.offsets[j.parts[0].0]).ok_or_else(|| internal(graph, v))?;
         Tensor::view(buffer.clone(), at, &graph.values[v.0].shape)
     }
 
@@ -139,11 +131,16 @@ impl Flat {
     /// last three buffers made, zeroed, on first use).
     pub(crate) fn joint_views(&mut self, gpu: &Gpu, graph: &Graph, v: Value) -> Result<[Tensor; 4]> {
         let g = self.joint_grad(gpu, graph, v)?;
+        let (m, s) = self.moment_buffers(gpu)?;
+        Ok([self.joint_view(&self.params, graph, v)?, g, self.joint_view(&m, graph, v)?, self.joint_view(&s, graph, v)?])
+    }
+
+    /// The buffers of the two Adam moments (made, zeroed, on first use).
+    fn moment_buffers(&mut self, gpu: &Gpu) -> Result<(Arc<wgpu::Buffer>, Arc<wgpu::Buffer>)> {
         if self.moments.is_none() {
             self.moments = Some((self.zeroed(gpu)?, self.zeroed(gpu)?));
         }
-        let (m, s) = self.moments.clone().expect("just made");
-        Ok([self.joint_view(&self.params, graph, v)?, g, self.joint_view(&m, graph, v)?, self.joint_view(&s, graph, v)?])
+        Ok(self.moments.clone().expect("just made"))
     }
 
     /// The buffer of the gradients (made, zeroed, on first use).
@@ -167,10 +164,7 @@ impl Flat {
 
     /// Parameter `v`'s Adam moments (views; the buffers are made, zeroed, on first use).
     pub(crate) fn moments(&mut self, gpu: &Gpu, graph: &Graph, v: Value) -> Result<(Tensor, Tensor)> {
-        if self.moments.is_none() {
-            self.moments = Some((self.zeroed(gpu)?, self.zeroed(gpu)?));
-        }
-        let (m, s) = self.moments.clone().expect("just made");
+        let (m, s) = self.moment_buffers(gpu)?;
         let view = |b| self.view(b, graph, v).ok_or_else(|| internal(graph, v))?;
         Ok((view(&m)?, view(&s)?))
     }

@@ -59,6 +59,7 @@ impl Executor {
     /// a copy: the Phong heads' three channel ranges cost three dispatches (3% of the tiny
     /// forward on lavapipe) before. The input must then live as long as the view
     /// ([`Executor::fusions`] extends its last use).
+    ///
     /// A concatenation of parameters laid out back to back (`flat::Joint`) is likewise a
     /// view, at offset 0 of its first part: the heads' weights and biases took six dispatches
     /// of every forward, six more of every backward.
@@ -110,6 +111,7 @@ impl Executor {
     /// The tensor of `v`'s first gradient, which later contributions are added to: in the flat
     /// gradient buffer for a parameter (see `Flat`), from the pool otherwise; its bytes go to
     /// `total`.
+    ///
     /// A joint of parameters' output (`flat::Joint`) gets its view of the flat gradients, and
     /// its parts that want one their ranges of it: its backward then has nothing to copy.
     pub(super) fn first_grad(&mut self, gpu: &Gpu, v: Value, total: &mut u64) -> Result<Tensor> {

@@ -9,6 +9,36 @@
 //! the 16-dimensional 4x4 kernels; [`expand`] maps into it (initialisation) and [`project`]
 //! is the orthogonal projection onto it, applied after each optimiser step so training stays
 //! inside it (projected gradient descent).
+//! [`Executor::keep_resize_conv`] marks a graph's weight to be kept so.
+
+use super::{Executor, Kind, Value};
+use crate::error::{Error, Result};
+use crate::gpu::Gpu;
+use crate::ops;
+
+impl Executor {
+    /// Keeps the 4x4 transposed-conv weight `v` (`[Cin, Cout, 4, 4]`) a resize-convolution:
+    /// every training step projects it back onto that subspace right after Adam, on the GPU
+    /// and in the step's own submit (see [`crate::graph::resize_conv`]). The weight is taken
+    /// to be one already (`Init::XavierUpsample`, or a checkpoint of such a run).
+    pub fn keep_resize_conv(&mut self, gpu: &Gpu, v: Value) -> Result<()> {
+        let info = self.graph.info(v);
+        if !matches!(info.kind, Kind::Param(_)) || info.shape.len() != 4 || info.shape[2..] != [4, 4] {
+            return Err(Error::Invalid(format!("'{}' {:?} is not a [Cin, Cout, 4, 4] parameter", info.name, info.shape)));
+        }
+        // The projection binds the weight itself: a joint's part may start unaligned (flat.rs).
+        if self.flat.joint_of(v).is_some() {
+            return Err(Error::Invalid(format!("'{}' is a part of a concatenation laid out as one view; a resize-convolution's weight cannot be", info.name)));
+        }
+        if self.projector.is_none() {
+            self.projector = Some(ops::resize_conv::projector(gpu)?);
+        }
+        if !self.resize_convs.contains(&v) {
+            self.resize_convs.push(v);
+        }
+        Ok(())
+    }
+}
 
 /// The 4x4 kernel `k ⊛ box2x2` of a 3x3 kernel `k` (row-major).
 pub fn expand(k: &[f32]) -> [f32; 16] {
