@@ -29,8 +29,11 @@ struct Acc16 { a: array<vec4<f32>, 16> }
 // acc[o] += dy[o] * x for the 16 output channels of the position held by lane `j` of the
 // group (g0..g3: its dy texels).
 fn bw_step(acc: Acc16, x: vec4<f32>, g0: vec4<f32>, g1: vec4<f32>, g2: vec4<f32>, g3: vec4<f32>, j: u32) -> Acc16 {
-    let d0 = subgroupShuffle(g0, j); let d1 = subgroupShuffle(g1, j);
-    let d2 = subgroupShuffle(g2, j); let d3 = subgroupShuffle(g3, j);
+    return bw_mac16(acc, x, subgroupShuffle(g0, j), subgroupShuffle(g1, j), subgroupShuffle(g2, j), subgroupShuffle(g3, j));
+}
+
+// acc[o] += d[o] * x for the 16 output channels d0..d3 hold.
+fn bw_mac16(acc: Acc16, x: vec4<f32>, d0: vec4<f32>, d1: vec4<f32>, d2: vec4<f32>, d3: vec4<f32>) -> Acc16 {
     var r = acc;
     r.a[0] += d0.x * x; r.a[1] += d0.y * x; r.a[2] += d0.z * x; r.a[3] += d0.w * x;
     r.a[4] += d1.x * x; r.a[5] += d1.y * x; r.a[6] += d1.z * x; r.a[7] += d1.w * x;
@@ -142,7 +145,10 @@ fn conv_fast_backward_weight_tex(ids: LaneIds) {
 struct Acc4 { a0: vec4<f32>, a1: vec4<f32>, a2: vec4<f32>, a3: vec4<f32> }
 
 fn bw_step4(acc: Acc4, x: vec4<f32>, g: vec4<f32>, j: u32) -> Acc4 {
-    let d = subgroupShuffle(g, j);
+    return bw_mac4(acc, x, subgroupShuffle(g, j));
+}
+
+fn bw_mac4(acc: Acc4, x: vec4<f32>, d: vec4<f32>) -> Acc4 {
     return Acc4(acc.a0 + d.x * x, acc.a1 + d.y * x, acc.a2 + d.z * x, acc.a3 + d.w * x);
 }
 
@@ -170,9 +176,7 @@ fn conv_fast_backward_weight_tex4(ids: LaneIds) {
         w = walk_next(w);
     }
     if (!b.live) { return; }
-    let o = bw_part_row(b) * 16u;
-    put_dw(o, 0u, 16u, acc.a0); put_dw(o, 1u, 16u, acc.a1);
-    put_dw(o, 2u, 16u, acc.a2); put_dw(o, 3u, 16u, acc.a3);
+    put_dw4(bw_part_row(b) * 16u, acc);
 }
 
 // ---- backward weight, half width (5-8 output channels): two dy texels per position --------
@@ -183,7 +187,10 @@ fn conv_fast_backward_weight_tex4(ids: LaneIds) {
 struct BwAcc8 { a: array<vec4<f32>, 8> }
 
 fn bw_step8(acc: BwAcc8, x: vec4<f32>, g0: vec4<f32>, g1: vec4<f32>, j: u32) -> BwAcc8 {
-    let d0 = subgroupShuffle(g0, j); let d1 = subgroupShuffle(g1, j);
+    return bw_mac8(acc, x, subgroupShuffle(g0, j), subgroupShuffle(g1, j));
+}
+
+fn bw_mac8(acc: BwAcc8, x: vec4<f32>, d0: vec4<f32>, d1: vec4<f32>) -> BwAcc8 {
     var r = acc;
     r.a[0] += d0.x * x; r.a[1] += d0.y * x; r.a[2] += d0.z * x; r.a[3] += d0.w * x;
     r.a[4] += d1.x * x; r.a[5] += d1.y * x; r.a[6] += d1.z * x; r.a[7] += d1.w * x;
@@ -219,5 +226,114 @@ fn conv_fast_backward_weight_tex8(ids: LaneIds) {
     let o = bw_part_row(b) * 16u;
     for (var c = 0u; c < 8u; c++) {
         put_dw(o, c, 16u, acc.a[c]);
+    }
+}
+
+// ---- backward weight, three W taps a lane (co <= 8, kw = 3, sw = 1, not folded) -------------
+// As the tiles above, but a lane owns a tap row r = (kd, kh) and channel quad q (pair r * cq +
+// q) with all three of its taps along W. At column stride 1 those taps read overlapping x:
+// 10 texels serve a step's 8 positions x 3 taps, where the tiles above fetch a texel for every
+// (position, tap), and a texel fetch costs lavapipe tens of FMAs (`rendernet bench
+// --operands`). The part layout is unchanged (the three taps are consecutive rows).
+fn bw_lane3(tl: vec3<u32>) -> BwLane {
+    let rows = p.kd * p.kh;
+    let cq = p.cpad / 4u;
+    let groups = (rows * cq + 7u) / 8u;
+    let r = tl.x / groups;
+    let pair = (tl.x % groups) * 8u + tl.y;
+    let bp = BwPair(r / p.co16, r % p.co16, pair, min(pair / cq, rows - 1u) * 3u, pair % cq);
+    return BwLane(bp, pair < rows * cq, tap_axes(bp.tap), chunk_rows(bp.chunk), tl.y, tl.z);
+}
+
+// The 10 x texels of a step for a lane of bw_lane3: columns ow0 - pw .. ow0 - pw + 9.
+struct Xs10 { r: Rows, x8: vec4<f32>, x9: vec4<f32> }
+
+fn bw_xs10(w: Walk, b: BwLane) -> Xs10 {
+    let z = walk_z(w, b.k);
+    let zw = i32(w.ow0) - i32(p.pw);
+    return Xs10(bw_xs(w, b), bw_x(w.n, b.bp.q, z.x, z.y, zw + 8), bw_x(w.n, b.bp.q, z.x, z.y, zw + 9));
+}
+
+struct Acc4x3 { t0: Acc4, t1: Acc4, t2: Acc4 }
+
+fn bw_step4x3(acc: Acc4x3, x0: vec4<f32>, x1: vec4<f32>, x2: vec4<f32>, g: vec4<f32>, j: u32) -> Acc4x3 {
+    let d = subgroupShuffle(g, j);
+    return Acc4x3(bw_mac4(acc.t0, x0, d), bw_mac4(acc.t1, x1, d), bw_mac4(acc.t2, x2, d));
+}
+
+fn put_dw4(o: u32, a: Acc4) {
+    put_dw(o, 0u, 16u, a.a0); put_dw(o, 1u, 16u, a.a1);
+    put_dw(o, 2u, 16u, a.a2); put_dw(o, 3u, 16u, a.a3);
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_backward_weight_tex4_w3(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    if (tl.x >= p.total) { return; }
+    // co16 = 1: channel group 0.
+    let b = bw_lane3(tl);
+    let base = b.base;
+    let z4 = vec4<f32>(0.0);
+    var acc = Acc4x3(Acc4(z4, z4, z4, z4), Acc4(z4, z4, z4, z4), Acc4(z4, z4, z4, z4));
+    var w = walk_from(b.span.x);
+    let steps = walk_steps(b.span);
+    for (var i = 0u; i < steps; i++) {
+        let g = dy_texel(w, b.lane, 0u);
+        let x = bw_xs10(w, b);
+        acc = bw_step4x3(acc, x.r.r0, x.r.r1, x.r.r2, g, base);
+        acc = bw_step4x3(acc, x.r.r1, x.r.r2, x.r.r3, g, base + 1u);
+        acc = bw_step4x3(acc, x.r.r2, x.r.r3, x.r.r4, g, base + 2u);
+        acc = bw_step4x3(acc, x.r.r3, x.r.r4, x.r.r5, g, base + 3u);
+        acc = bw_step4x3(acc, x.r.r4, x.r.r5, x.r.r6, g, base + 4u);
+        acc = bw_step4x3(acc, x.r.r5, x.r.r6, x.r.r7, g, base + 5u);
+        acc = bw_step4x3(acc, x.r.r6, x.r.r7, x.x8, g, base + 6u);
+        acc = bw_step4x3(acc, x.r.r7, x.x8, x.x9, g, base + 7u);
+        w = walk_next(w);
+    }
+    if (!b.live) { return; }
+    let o = bw_part_row(b) * 16u;
+    put_dw4(o, acc.t0);
+    put_dw4(o + p.cpad * 16u, acc.t1);
+    put_dw4(o + 2u * p.cpad * 16u, acc.t2);
+}
+
+struct Acc8x3 { t0: BwAcc8, t1: BwAcc8, t2: BwAcc8 }
+
+fn bw_step8x3(acc: Acc8x3, x0: vec4<f32>, x1: vec4<f32>, x2: vec4<f32>, g0: vec4<f32>, g1: vec4<f32>, j: u32) -> Acc8x3 {
+    let d0 = subgroupShuffle(g0, j); let d1 = subgroupShuffle(g1, j);
+    return Acc8x3(bw_mac8(acc.t0, x0, d0, d1), bw_mac8(acc.t1, x1, d0, d1), bw_mac8(acc.t2, x2, d0, d1));
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_backward_weight_tex8_w3(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    if (tl.x >= p.total) { return; }
+    // co16 = 1: channel group 0.
+    let b = bw_lane3(tl);
+    let base = b.base;
+    var acc: Acc8x3;
+    var w = walk_from(b.span.x);
+    let steps = walk_steps(b.span);
+    for (var i = 0u; i < steps; i++) {
+        let g0 = dy_texel(w, b.lane, 0u);
+        let g1 = dy_texel(w, b.lane, 1u);
+        let x = bw_xs10(w, b);
+        acc = bw_step8x3(acc, x.r.r0, x.r.r1, x.r.r2, g0, g1, base);
+        acc = bw_step8x3(acc, x.r.r1, x.r.r2, x.r.r3, g0, g1, base + 1u);
+        acc = bw_step8x3(acc, x.r.r2, x.r.r3, x.r.r4, g0, g1, base + 2u);
+        acc = bw_step8x3(acc, x.r.r3, x.r.r4, x.r.r5, g0, g1, base + 3u);
+        acc = bw_step8x3(acc, x.r.r4, x.r.r5, x.r.r6, g0, g1, base + 4u);
+        acc = bw_step8x3(acc, x.r.r5, x.r.r6, x.r.r7, g0, g1, base + 5u);
+        acc = bw_step8x3(acc, x.r.r6, x.r.r7, x.x8, g0, g1, base + 6u);
+        acc = bw_step8x3(acc, x.r.r7, x.x8, x.x9, g0, g1, base + 7u);
+        w = walk_next(w);
+    }
+    if (!b.live) { return; }
+    let o = bw_part_row(b) * 16u;
+    let next = p.cpad * 16u;
+    for (var c = 0u; c < 8u; c++) {
+        put_dw(o, c, 16u, acc.t0.a[c]);
+        put_dw(o + next, c, 16u, acc.t1.a[c]);
+        put_dw(o + 2u * next, c, 16u, acc.t2.a[c]);
     }
 }

@@ -110,7 +110,7 @@ fn direct_backward_input_of_one_channel() {
 }
 
 /// The texture family's 4- and 8-channel tiles (`conv_fast_forward_tex4`, its `_rows3` form,
-/// `..._tex8`, `..._backward_weight_tex4` and `_tex8`) on heads with enough input channels not to fold
+/// `..._tex8`, `..._backward_weight_tex4` and `_tex8`, their `_w3` forms) on heads with enough input channels not to fold
 /// (8 -> 3, 16 -> 1, 12 -> 7, 3x3), forced onto textures: with fewer input channels the direct
 /// kernels run instead.
 #[test]
@@ -124,6 +124,12 @@ fn texture_heads_of_at_most_eight_output_channels() {
     check(&with(conv2d([3, 3], [1, 1], Padding::Same), 8, 3, [1, 11, 5]), 101);
     check(&with(conv2d([3, 3], [1, 1], Padding::Same), 12, 7, [1, 9, 10]), 102);
     check(&with(conv2d([3, 3], [2, 1], Padding::Same), 8, 6, [1, 13, 5]), 103);
+    // Column stride 2 and a width-2 kernel, where a lane's W taps share no x: one tap a lane
+    // (`..._backward_weight_tex4`, `_tex8`); the 3x3 cases above take three (`_w3`), the last
+    // at row stride 2 and explicit padding.
+    check(&with(conv2d([3, 3], [1, 2], Padding::Same), 8, 3, [1, 5, 11]), 105);
+    check(&with(conv2d([3, 2], [1, 1], Padding::Same), 12, 7, [1, 6, 9]), 106);
+    check(&with(conv2d([3, 3], [2, 1], Padding::explicit_2d([0, 2], [1, 0])), 9, 4, [1, 7, 19]), 108);
 }
 
 /// The narrow 3x3 heads' forward on the unpacked input (`conv_nchw_forward3x3`, forced by
@@ -268,6 +274,39 @@ fn packings_copied_in_equal_texture_stores() {
             assert!(copied[k] == stored[k], "{c:?} {what}: copied-in packings differ from texture stores");
         }
     }
+}
+
+/// The first layer's stage of a grid whose rows are whole staging rows (width 64) is x copied
+/// in as it lies, with no dispatch, on a CPU adapter even where the packings store their texels
+/// (`RENDERNET_PACK_COPIES=store`, or a calibration that found copies no faster): there the
+/// copy replaces a dispatch, its loads and its stores. A second adapter settled to store runs
+/// the forward and the weight gradient, the two passes that stage x: one split each on a CPU
+/// adapter (none elsewhere), and the same bits as the shared adapter, which copies.
+#[test]
+fn a_first_layer_grid_of_whole_rows_is_copied_in_where_packings_store() {
+    let c = Case { n: 1, ci: 1, co: 8, input: [3, 4, 64], kernel: ConvKernel::Texture, ..conv3d([5, 5, 5], [2, 2, 2], Padding::Same) };
+    let want = passes(&c, c.kernel, 360);
+    let stores = rendernet::Gpu::new().expect("a second adapter");
+    assert!(stores.settle_pack_copies(false));
+    let Op::Conv(op) = c.op else { unreachable!() };
+    let g = geom(&c);
+    let (xs, ws, ys) = (shape(c.d2, c.n, c.ci, g.input), w_shape(&c), shape(c.d2, c.n, c.co, g.output));
+    let put = |s: &[usize], v: &[f64]| Tensor::from_slice(&stores, s, &v.iter().map(|&x| x as f32).collect::<Vec<_>>()).unwrap();
+    // passes()'s draws, in its order.
+    let mut rng = Rng(360);
+    let numel = |s: &[usize]| s.iter().product::<usize>();
+    let (x, w) = (rng.vec(numel(&xs), -1.0, 1.0), rng.vec(numel(&ws), -1.0, 1.0));
+    let (b, r) = (rng.vec(c.co, -1.0, 1.0), rng.vec(numel(&ys), -1.0, 1.0));
+    let (tx, tw, tb, tr) = (put(&xs, &x), put(&ws, &w), put(&[c.co], &b), put(&ys, &r));
+    let (ty, tdw) = (Tensor::zeros(&stores, &ys).unwrap(), Tensor::zeros(&stores, &ws).unwrap());
+    let before = stores.pass_splits();
+    stores.run(|p| op.forward(c.kernel, &stores, p, &tx, &tw, Some(&tb), &ty)).unwrap();
+    stores.run(|p| op.backward_weight(c.kernel, &stores, p, &tx, &tr, &tdw)).unwrap();
+    let splits = stores.pass_splits() - before;
+    assert_eq!(splits, if copies_on_this_adapter() { 2 } else { 0 }, "{splits} splits");
+    let got = |t: &Tensor| t.to_vec(&stores).unwrap().iter().map(|&v| v as f64).collect::<Vec<_>>();
+    assert!(got(&ty) == want[0], "forward differs from the shared adapter's");
+    assert!(got(&tdw) == want[2], "weight gradient differs from the shared adapter's");
 }
 
 /// [`passes`] with the weights, where `w_at` says so, a view at that value offset of a buffer

@@ -501,16 +501,23 @@ fn backward_weight_tex(
     let copad = g.co.div_ceil(16) * 16;
     let g = &f.g;
     let taps = volume(g.kernel);
-    let groups = (taps * cpad / 4).div_ceil(8) * (copad / 16);
+    // At most 8 output channels: three W taps a lane where they read overlapping x (`_w3`),
+    // a lane per tap row. Not with 16 channels a lane: their 3 x 16 x 4 accumulators ran
+    // 30-50x slower on lavapipe than the 16 x 4 of `conv_fast_backward_weight_tex`.
+    let w3 = g.co <= 8 && g.kernel[2] == 3 && g.stride[2] == 1;
+    let lane_taps = if w3 { taps / 3 } else { taps };
+    let groups = (lane_taps * cpad / 4).div_ceil(8) * (copad / 16);
     let (chunk, nchunks) = weight_chunks(gpu, g.n * g.output[0] * g.output[1], groups, 128);
     let part = gpu.scratch(&[nchunks, taps, cpad, copad])?;
     let tiles = nchunks * groups;
     let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, total: tiles as u32, ..params(g, cpad) };
     let args = [xp.arg(), dyp.arg(), Arg::W(&part)];
     // At most 4 or 8 output channels: one or two dy texels a position instead of four.
-    let entry = match g.co {
-        ..=4 => "conv_fast_backward_weight_tex4",
-        5..=8 => "conv_fast_backward_weight_tex8",
+    let entry = match (g.co, w3) {
+        (..=4, false) => "conv_fast_backward_weight_tex4",
+        (..=4, true) => "conv_fast_backward_weight_tex4_w3",
+        (5..=8, false) => "conv_fast_backward_weight_tex8",
+        (5..=8, true) => "conv_fast_backward_weight_tex8_w3",
         _ => "conv_fast_backward_weight_tex",
     };
     gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;

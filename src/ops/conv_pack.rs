@@ -141,8 +141,11 @@ pub(super) fn stage_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry,
         return Ok(view);
     }
     // Rows of whole staging rows: the stage's texels are x's vec4s in order, so x itself is
-    // copied in, with no dispatch (the first layer on a 64^3 grid).
-    if iw % 4 == 0 && staging_pitch(iw / 4) == iw / 4 && x.offset().is_multiple_of(16) && copies_in(gpu, pass) {
+    // copied in, with no dispatch (the first layer on a 64^3 grid). On a CPU adapter this
+    // pays whatever `copies_win` says of packings, which store each texel either way: here a
+    // copy replaces the dispatch, its loads and its stores.
+    let cpu = gpu.info.device_type == wgpu::DeviceType::Cpu;
+    if iw % 4 == 0 && staging_pitch(iw / 4) == iw / 4 && x.offset().is_multiple_of(16) && cpu && gpu.can_split(pass) {
         gpu.copy_to_texture(pass, x, &view)?;
         return Ok(view);
     }
