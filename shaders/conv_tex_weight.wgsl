@@ -241,7 +241,9 @@ fn bw_lane3(tl: vec3<u32>) -> BwLane {
     let groups = (rows * cq + 7u) / 8u;
     let r = tl.x / groups;
     let pair = (tl.x % groups) * 8u + tl.y;
-    let bp = BwPair(r / p.co16, r % p.co16, pair, min(pair / cq, rows - 1u) * 3u, pair % cq);
+    // Output channel groups of 8 (one for the narrow tiles): cg is the group.
+    let per = (p.co + 7u) / 8u;
+    let bp = BwPair(r / per, r % per, pair, min(pair / cq, rows - 1u) * 3u, pair % cq);
     return BwLane(bp, pair < rows * cq, tap_axes(bp.tap), chunk_rows(bp.chunk), tl.y, tl.z);
 }
 
@@ -308,15 +310,15 @@ fn bw_step8x3(acc: Acc8x3, x0: vec4<f32>, x1: vec4<f32>, x2: vec4<f32>, g0: vec4
 fn conv_fast_backward_weight_tex8_w3(ids: LaneIds) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
-    // co16 = 1: channel group 0.
+    // Output channels 8 cg .. 8 cg + 7: dy quads 2 cg, 2 cg + 1.
     let b = bw_lane3(tl);
-    let base = b.base;
+    let base = b.base; let cg = b.bp.cg;
     var acc: Acc8x3;
     var w = walk_from(b.span.x);
     let steps = walk_steps(b.span);
     for (var i = 0u; i < steps; i++) {
-        let g0 = dy_texel(w, b.lane, 0u);
-        let g1 = dy_texel(w, b.lane, 1u);
+        let g0 = dy_texel(w, b.lane, 2u * cg);
+        let g1 = dy_texel(w, b.lane, 2u * cg + 1u);
         let x = bw_xs10(w, b);
         acc = bw_step8x3(acc, x.r.r0, x.r.r1, x.r.r2, g0, g1, base);
         acc = bw_step8x3(acc, x.r.r1, x.r.r2, x.r.r3, g0, g1, base + 1u);
@@ -329,11 +331,12 @@ fn conv_fast_backward_weight_tex8_w3(ids: LaneIds) {
         w = walk_next(w);
     }
     if (!b.live) { return; }
-    let o = bw_part_row(b) * 16u;
-    let next = p.cpad * 16u;
+    let copad = p.co16 * 16u;
+    let o = bw_part_row(b) * copad + 8u * cg;
+    let next = p.cpad * copad;
     for (var c = 0u; c < 8u; c++) {
-        put_dw(o, c, 16u, acc.t0.a[c]);
-        put_dw(o + next, c, 16u, acc.t1.a[c]);
-        put_dw(o + 2u * next, c, 16u, acc.t2.a[c]);
+        put_dw(o, c, copad, acc.t0.a[c]);
+        put_dw(o + next, c, copad, acc.t1.a[c]);
+        put_dw(o + 2u * next, c, copad, acc.t2.a[c]);
     }
 }

@@ -501,12 +501,15 @@ fn backward_weight_tex(
     let copad = g.co.div_ceil(16) * 16;
     let g = &f.g;
     let taps = volume(g.kernel);
-    // At most 8 output channels: three W taps a lane where they read overlapping x (`_w3`),
-    // a lane per tap row. Not with 16 channels a lane: their 3 x 16 x 4 accumulators ran
-    // 30-50x slower on lavapipe than the 16 x 4 of `conv_fast_backward_weight_tex`.
-    let w3 = g.co <= 8 && g.kernel[2] == 3 && g.stride[2] == 1;
-    let lane_taps = if w3 { taps / 3 } else { taps };
-    let groups = (lane_taps * cpad / 4).div_ceil(8) * (copad / 16);
+    // Three W taps a lane where they read overlapping x (`_w3`): a lane per tap row and at
+    // most 8 output channels (3 x 16 x 4 accumulators a lane ran 30-50x slower on lavapipe
+    // than the 16 x 4 of `conv_fast_backward_weight_tex`). Past 8 output channels only with 4
+    // or more input channel quads: on an AMD EPYC Zen 4 conv3d 16->16 3^3 took 16% less time
+    // and conv2d 256->256 3x3 8% less, but conv3d 8->16 (two quads, a quarter of its lanes
+    // idle) 10% more (README "Three W taps a lane").
+    let w3 = g.kernel[2] == 3 && g.stride[2] == 1 && (g.co <= 8 || cpad >= 16);
+    let (lane_taps, co_groups) = if w3 { (taps / 3, g.co.div_ceil(8)) } else { (taps, copad / 16) };
+    let groups = (lane_taps * cpad / 4).div_ceil(8) * co_groups;
     let (chunk, nchunks) = weight_chunks(gpu, g.n * g.output[0] * g.output[1], groups, 128);
     let part = gpu.scratch(&[nchunks, taps, cpad, copad])?;
     let tiles = nchunks * groups;
@@ -517,7 +520,7 @@ fn backward_weight_tex(
         (..=4, false) => "conv_fast_backward_weight_tex4",
         (..=4, true) => "conv_fast_backward_weight_tex4_w3",
         (5..=8, false) => "conv_fast_backward_weight_tex8",
-        (5..=8, true) => "conv_fast_backward_weight_tex8_w3",
+        (_, true) => "conv_fast_backward_weight_tex8_w3",
         _ => "conv_fast_backward_weight_tex",
     };
     gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
