@@ -229,9 +229,10 @@ fn conv_fast_backward_weight_tex8(ids: LaneIds) {
     }
 }
 
-// ---- backward weight, three W taps a lane (co <= 8, kw = 3, sw = 1, not folded) -------------
+// ---- backward weight, three W taps a lane (kw = 3, sw = 1, not folded) ----------------------
 // As the tiles above, but a lane owns a tap row r = (kd, kh) and channel quad q (pair r * cq +
-// q) with all three of its taps along W. At column stride 1 those taps read overlapping x:
+// q) with all three of its taps along W, for at most 4 output channels (`_tex4_w3`) or a group
+// of 8 (`_tex8_w3`; src/ops/conv_fast.rs says when). At column stride 1 those taps read overlapping x:
 // 10 texels serve a step's 8 positions x 3 taps, where the tiles above fetch a texel for every
 // (position, tap), and a texel fetch costs lavapipe tens of FMAs (`rendernet bench
 // --operands`). The part layout is unchanged (the three taps are consecutive rows).
