@@ -505,8 +505,8 @@ fn backward_weight_tex(
     // most 8 output channels (3 x 16 x 4 accumulators a lane ran 30-50x slower on lavapipe
     // than the 16 x 4 of `conv_fast_backward_weight_tex`). Past 8 output channels only with 4
     // or more input channel quads: on an AMD EPYC Zen 4 conv3d 16->16 3^3 took 16% less time
-    // and conv2d 256->256 3x3 8% less, but conv3d 8->16 (two quads, a quarter of its lanes
-    // idle) 10% more (README "Three W taps a lane").
+    // and conv2d 256->256 3x3 13% less, but conv3d 8->16 (two quads, a quarter of its lanes
+    // idle) 12% more (README "Three W taps a lane").
     let w3 = g.kernel[2] == 3 && g.stride[2] == 1 && (g.co <= 8 || cpad >= 16);
     let (lane_taps, co_groups) = if w3 { (taps / 3, g.co.div_ceil(8)) } else { (taps, copad / 16) };
     let groups = (lane_taps * cpad / 4).div_ceil(8) * co_groups;
