@@ -276,8 +276,7 @@ fn conv_fast_backward_weight_tex4_w3(ids: LaneIds) {
     // co16 = 1: channel group 0.
     let b = bw_lane3(tl);
     let base = b.base;
-    let z4 = vec4<f32>(0.0);
-    var acc = Acc4x3(Acc4(z4, z4, z4, z4), Acc4(z4, z4, z4, z4), Acc4(z4, z4, z4, z4));
+    var acc: Acc4x3;
     var w = walk_from(b.span.x);
     let steps = walk_steps(b.span);
     for (var i = 0u; i < steps; i++) {

@@ -501,12 +501,8 @@ fn backward_weight_tex(
     let copad = g.co.div_ceil(16) * 16;
     let g = &f.g;
     let taps = volume(g.kernel);
-    // Three W taps a lane where they read overlapping x (`_w3`): a lane per tap row and at
-    // most 8 output channels (3 x 16 x 4 accumulators a lane ran 30-50x slower on lavapipe
-    // than the 16 x 4 of `conv_fast_backward_weight_tex`). Past 8 output channels only with 4
-    // or more input channel quads: on an AMD EPYC Zen 4 conv3d 16->16 3^3 took 16% less time
-    // and conv2d 256->256 3x3 13% less, but conv3d 8->16 (two quads, a quarter of its lanes
-    // idle) 12% more (README "Three W taps a lane").
+    // Three W taps a lane where they read overlapping x (`_w3`), 8 output channels a lane at
+    // most; past 8 only with 4+ input channel quads (README "Three W taps a lane", an AMD Zen 4).
     let w3 = g.kernel[2] == 3 && g.stride[2] == 1 && (g.co <= 8 || cpad >= 16);
     let (lane_taps, co_groups) = if w3 { (taps / 3, g.co.div_ceil(8)) } else { (taps, copad / 16) };
     let groups = (lane_taps * cpad / 4).div_ceil(8) * co_groups;
@@ -515,7 +511,7 @@ fn backward_weight_tex(
     let tiles = nchunks * groups;
     let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, total: tiles as u32, ..params(g, cpad) };
     let args = [xp.arg(), dyp.arg(), Arg::W(&part)];
-    // At most 4 or 8 output channels: one or two dy texels a position instead of four.
+    // One or two dy texels a position instead of four where there are at most 4 or 8 outputs.
     let entry = match (g.co, w3) {
         (..=4, false) => "conv_fast_backward_weight_tex4",
         (..=4, true) => "conv_fast_backward_weight_tex4_w3",
