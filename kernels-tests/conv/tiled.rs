@@ -147,6 +147,36 @@ fn texture_weight_gradients_of_three_w_taps_a_lane() {
     check(&with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 1, 8, 12, [2, 3, 9]), 132);
 }
 
+/// The narrow heads' weight gradient on x in place (`conv_direct_backward_weight_w3` and
+/// `_w3x8`: 3 W taps at column stride 1, at most 8 output channels, rows of whole staging rows
+/// so x is copied into its stage), against finite differences: 16 -> 3 (a quad of dy with one
+/// padding channel) with `Same` padding (the first texel's fourth voxel starts a step), 16 -> 5
+/// (two dy quads) at row stride 2 with 2 columns before and none after (its third), 12 -> 8 in 3D
+/// (depth taps, channels not a multiple of 16) and 16 -> 2 unpadded (steps start on a texel),
+/// batch 2 where 2D. Then on a second adapter settled to store its packings (so only a copy
+/// splits the pass): the weight gradient of the first case splits its pass once on a CPU
+/// adapter (x copied into the stage; the channel-quad tiles would pack it with stores), never
+/// elsewhere.
+#[test]
+fn heads_weight_gradient_reads_x_in_its_stage() {
+    let with = |c: Case, n: usize, ci: usize, co: usize, input: [usize; 3]| Case { n, ci, co, input, kernel: ConvKernel::Texture, ..c };
+    let head = with(conv2d([3, 3], [1, 1], Padding::Same), 2, 16, 3, [1, 5, 64]);
+    check(&head, 140);
+    check(&with(conv2d([3, 3], [2, 1], Padding::explicit_2d([1, 2], [0, 0])), 2, 16, 5, [1, 7, 64]), 141);
+    check(&with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 1, 12, 8, [2, 3, 64]), 142);
+    check(&with(conv2d([3, 3], [1, 1], Padding::explicit_2d([0, 0], [0, 0])), 2, 16, 2, [1, 4, 64]), 143);
+    let stores = rendernet::Gpu::new().expect("a second adapter");
+    assert!(stores.settle_pack_copies(false));
+    let Op::Conv(op) = head.op else { unreachable!() };
+    let g = geom(&head);
+    let (xs, ws, ys) = (shape(true, head.n, head.ci, g.input), w_shape(&head), shape(true, head.n, head.co, g.output));
+    let (tx, tr, tdw) = (Tensor::zeros(&stores, &xs).unwrap(), Tensor::zeros(&stores, &ys).unwrap(), Tensor::zeros(&stores, &ws).unwrap());
+    let before = stores.pass_splits();
+    stores.run(|p| op.backward_weight(head.kernel, &stores, p, &tx, &tr, &tdw)).unwrap();
+    let cpu = stores.info.device_type == wgpu::DeviceType::Cpu;
+    assert_eq!(stores.pass_splits() - before, u64::from(cpu), "splits of the head's weight gradient");
+}
+
 /// The narrow 3x3 heads' forward on the unpacked input (`conv_nchw_forward3x3`, forced by
 /// `ConvKernel::Nchw`; the backward passes run the texture family): heights past one block of
 /// 8 rows and short of it (9, 17, 7, 3, 10), one vec4 column (width 4) and several (8, 12,

@@ -6,7 +6,9 @@
 
 use super::conv::{Geometry, Params};
 use crate::error::{Error, Result};
-use super::conv_pack::{Packed, pack_folded, pack_input, pack_w, pack_x, stage_x};
+use super::conv_pack::{Packed, pack_w, pack_x, stage_x};
+pub(crate) use super::conv_fast_weight::backward_weight;
+use super::conv_fast_weight::{backward_weight_tex, weight_textures};
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 pub(crate) use super::conv_operands::{Operands, calibrated};
 
@@ -15,10 +17,10 @@ const SHADER: Shader = wgsl!("conv_fast");
 /// into its textures) and `conv_tex_weight.wgsl` (weight-gradient tiles) use
 /// `conv_fast.wgsl`'s parameters and helpers, and `conv_direct.wgsl` (the direct kernels of
 /// convs with few input channels) all four files'.
-pub(super) const TEX_SHADER: Shader = wgsl!("conv_tex": "conv_fast", "conv_tex", "conv_tex_pack", "conv_tex_weight", "conv_direct");
+pub(super) const TEX_SHADER: Shader = wgsl!("conv_tex": "conv_fast", "conv_tex", "conv_tex_pack", "conv_tex_weight", "conv_direct", "conv_direct_weight");
 
 /// The tiled kernels' parameters for dispatch geometry `g` with `cpad` packed channels.
-fn params(g: &Geometry, cpad: usize) -> Params {
+pub(super) fn params(g: &Geometry, cpad: usize) -> Params {
     let p = g.params();
     Params {
         cpad: cpad as u32,
@@ -63,7 +65,7 @@ impl Folded {
 /// channel group) iterations with channels padded to a multiple of `quantum` (4 for the
 /// forward tile, 8 for the weight-gradient tile), the smaller fold on a tie. Only convs with
 /// few input channels gain; the others keep `fh = fw = 1`.
-fn fold(g: &Geometry, quantum: usize) -> Folded {
+pub(super) fn fold(g: &Geometry, quantum: usize) -> Folded {
     let [kd, kh, kw] = g.kernel;
     let cost = |f: usize, taps: usize| taps * (g.ci * f).div_ceil(quantum);
     let (fh, fw) = [(1, 1), (1, kw), (kh, kw)].into_iter().min_by_key(|&(fh, fw)| cost(fh * fw, kd * (kh / fh) * (kw / fw))).unwrap();
@@ -85,12 +87,12 @@ pub(super) fn volume(s: [usize; 3]) -> usize {
 }
 
 /// Whether `ops` asks for textures and the device can run the texture kernels.
-fn textures_wanted(gpu: &Gpu, ops: Operands) -> bool {
+pub(super) fn textures_wanted(gpu: &Gpu, ops: Operands) -> bool {
     ops == Operands::Textures && gpu.has_subgroups_of_8() && gpu.reads_rgba32f_storage()
 }
 
 /// Whether `n` items of `cpad` packed channels over `input` fit one 3D texture (`pack_x`).
-fn x_texture_fits(gpu: &Gpu, n: usize, cpad: usize, [id, ih, iw]: [usize; 3]) -> bool {
+pub(super) fn x_texture_fits(gpu: &Gpu, n: usize, cpad: usize, [id, ih, iw]: [usize; 3]) -> bool {
     iw.max(ih).max(n * cpad / 4 * id) <= gpu.limits.max_texture_dimension_3d as usize
 }
 
@@ -108,7 +110,7 @@ fn textures_fit(gpu: &Gpu, ops: Operands, g: &Geometry, cpad: usize) -> bool {
 /// Whether the conv `g` runs the direct texture kernels for `ops`: a conv the texture family
 /// would fold (few input channels), whose staged input (`stage_x`) and unfolded packed
 /// weights fit the device's textures.
-fn direct_fits(gpu: &Gpu, ops: Operands, g: &Geometry, f: &Folded) -> bool {
+pub(super) fn direct_fits(gpu: &Gpu, ops: Operands, g: &Geometry, f: &Folded) -> bool {
     f.fold() > 1 && textures_fit(gpu, ops, g, g.ci.div_ceil(4) * 4) && x_texture_fits(gpu, g.n, 4 * g.ci, g.input)
 }
 
@@ -454,147 +456,4 @@ fn backward_input_k5s2(
     let [depth, rows, cols] = g.input;
     let grid = [((cols + g.pad[2] % 2).div_ceil(16) * rows.div_ceil(8)) as u32, depth.div_ceil(8) as u32, g.n as u32];
     gpu.dispatch(pass, TEX_SHADER, "conv_direct_backward_input_k5s2", &p, &args, grid)
-}
-
-/// `dy` packed as the texture kernels pack an input: dy's channels over the output extent
-/// (at most 4 channels: one quad per voxel, for the 4-channel kernel).
-fn pack_dy_tex(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, dy: &Tensor) -> Result<Packed> {
-    let dy_geom = Geometry { ci: g.co, input: g.output, ..*g };
-    pack_x(gpu, pass, &dy_geom, &Folded::none(dy_geom), dy, dy_tex_channels(g), true)
-}
-
-/// Channels of dy as packed for the texture weight gradient (part keeps `copad`): 4 or 8
-/// for the narrow kernels, which then share the packing of [`backward_input`] (`backward`),
-/// else whole groups of 16. The shaders' `dy_quads` reads it back.
-fn dy_tex_channels(g: &Geometry) -> usize {
-    if g.co <= 8 { g.co.div_ceil(4) * 4 } else { g.co.div_ceil(16) * 16 }
-}
-
-/// Whether `backward_weight` of `g` runs on textures for `ops`, with the fold and packed
-/// input channels it uses and dy's packed channels.
-fn weight_textures(gpu: &Gpu, g: &Geometry, ops: Operands) -> Option<(Folded, usize, usize)> {
-    let f = fold(g, 4);
-    let cpad = f.g.ci.div_ceil(4) * 4;
-    // Two activation textures (x folded or staged, dy) and no weight texture.
-    let x_fits = if f.fold() > 1 { direct_fits(gpu, ops, g, &f) } else { x_texture_fits(gpu, g.n, cpad, f.g.input) };
-    let fits = textures_wanted(gpu, ops) && x_fits && x_texture_fits(gpu, g.n, dy_tex_channels(g), g.output);
-    fits.then(|| (f, cpad, dy_tex_channels(g)))
-}
-
-/// `backward_weight` on textures (see `conv_fast_backward_weight_tex`), dy packed by
-/// [`pack_dy_tex`].
-#[allow(clippy::too_many_arguments)]
-fn backward_weight_tex(
-    gpu: &Gpu,
-    pass: &mut wgpu::ComputePass<'_>,
-    g: &Geometry,
-    f: &Folded,
-    x: &Tensor,
-    dyp: &Packed,
-    dw: &Tensor,
-    cpad: usize,
-) -> Result<()> {
-    if f.fold() > 1 {
-        return backward_weight_direct(gpu, pass, g, x, dyp, dw);
-    }
-    let xp = pack_x(gpu, pass, g, f, x, cpad, true)?;
-    let copad = g.co.div_ceil(16) * 16;
-    let g = &f.g;
-    let taps = volume(g.kernel);
-    // Three W taps a lane where they read overlapping x (`_w3`), 8 output channels a lane at
-    // most; past 8 only with 4+ input channel quads (README "Three W taps a lane", an AMD Zen 4).
-    let w3 = g.kernel[2] == 3 && g.stride[2] == 1 && (g.co <= 8 || cpad >= 16);
-    let (lane_taps, co_groups) = if w3 { (taps / 3, g.co.div_ceil(8)) } else { (taps, copad / 16) };
-    let groups = (lane_taps * cpad / 4).div_ceil(8) * co_groups;
-    let (chunk, nchunks) = weight_chunks(gpu, g.n * g.output[0] * g.output[1], groups, 128);
-    let part = gpu.scratch(&[nchunks, taps, cpad, copad])?;
-    let tiles = nchunks * groups;
-    let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, total: tiles as u32, ..params(g, cpad) };
-    let args = [xp.arg(), dyp.arg(), Arg::W(&part)];
-    // One or two dy texels a position instead of four where there are at most 4 or 8 outputs.
-    let entry = match (g.co, w3) {
-        (..=4, false) => "conv_fast_backward_weight_tex4",
-        (..=4, true) => "conv_fast_backward_weight_tex4_w3",
-        (5..=8, false) => "conv_fast_backward_weight_tex8",
-        (_, true) => "conv_fast_backward_weight_tex8_w3",
-        _ => "conv_fast_backward_weight_tex",
-    };
-    gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
-    dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
-}
-
-/// The chunks of `rows` output rows a weight-gradient dispatch of `per_chunk` tiles a chunk
-/// splits them into, as (rows a chunk, chunks); never more chunks than rows. Each chunk adds a
-/// partial sum that `conv_fast_weight_sum` reads back with storage loads (on lavapipe 22.3 a
-/// loop over the 8 lanes each), so more chunks spread the tiles over more threads but cost
-/// more in the sum. On a CPU adapter the dispatch aims at 16 tiles per CPU thread (lavapipe
-/// runs one thread per CPU): on a 2-core AMD EPYC Zen 3 this took the weight gradients of the
-/// tiny preset's training shapes 5-26% faster (medians) than the 128-256 tiles before (README
-/// "Fewer chunks in the weight gradients") and left the large ones unchanged; elsewhere at
-/// `gpu_tiles`.
-fn weight_chunks(gpu: &Gpu, rows: usize, per_chunk: usize, gpu_tiles: usize) -> (usize, usize) {
-    // Read once: on Linux the thread count comes from cgroup files, and this runs per recording.
-    static CPU_TILES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
-    let tiles = if gpu.info.device_type == wgpu::DeviceType::Cpu {
-        *CPU_TILES.get_or_init(|| 16 * std::thread::available_parallelism().map_or(2, |n| n.get()))
-    } else {
-        gpu_tiles
-    };
-    let chunk = rows.div_ceil(tiles.div_ceil(per_chunk).clamp(1, rows));
-    (chunk, rows.div_ceil(chunk))
-}
-
-/// The weight gradient of a conv the texture family would fold (few input channels), without
-/// folding: `conv_direct_backward_weight` reads the staged input in place (see its shader).
-fn backward_weight_direct(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor, dyp: &Packed, dw: &Tensor) -> Result<()> {
-    let cpad = g.ci.div_ceil(4) * 4;
-    let p = params(g, cpad);
-    let stage = stage_x(gpu, pass, g, x, &p)?;
-    // 5 x 5 taps (the first layer): `_k5` tiles take them all, sharing each dy fetch.
-    let k5 = g.kernel[1] == 5 && g.kernel[2] == 5;
-    let (entry, nkh, nkw) = if k5 { ("conv_direct_backward_weight_k5", 1, 1) } else { ("conv_direct_backward_weight", g.kernel[1], g.kernel[2].div_ceil(4)) };
-    let cols = g.kernel[0] * g.ci * nkh * nkw * g.co.div_ceil(8);
-    let (chunk, nchunks) = weight_chunks(gpu, g.n * g.output[0] * g.output[1], cols, 256);
-    let part = gpu.scratch(&[nchunks, volume(g.kernel), cpad, g.co.div_ceil(16) * 16])?;
-    let tiles = nchunks * cols;
-    let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, total: tiles as u32, ..p };
-    let args = [Arg::ReadStorageTexture(&stage, wgpu::TextureViewDimension::D3), dyp.arg(), Arg::W(&part)];
-    gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
-    dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
-}
-
-/// Tiled `dw[co, ci, k] = Σ dy[n, co, o] x[n, ci, o*s - pad + k]`: partial sums per chunk of
-/// output rows, then a fixed-order sum over chunks (deterministic, no atomics).
-pub(crate) fn backward_weight(
-    gpu: &Gpu,
-    pass: &mut wgpu::ComputePass<'_>,
-    g: &Geometry,
-    x: &Tensor,
-    dy: &Tensor,
-    dw: &Tensor,
-    ops: Operands,
-) -> Result<()> {
-    if let Some((f, cpad, _)) = weight_textures(gpu, g, ops) {
-        let dyp = pack_dy_tex(gpu, pass, g, dy)?;
-        return backward_weight_tex(gpu, pass, g, &f, x, &dyp, dw, cpad);
-    }
-    let f = fold(g, 8);
-    let (cpad, copad) = (f.g.ci.div_ceil(8) * 8, g.co.div_ceil(16) * 16);
-    let xp = pack_folded(gpu, pass, g, &f, x, cpad)?;
-    let g = &f.g;
-    let dyp = pack_input(gpu, pass, dy, g.n, g.co, g.output, copad)?;
-    let taps = volume(g.kernel);
-    let columns = taps * (cpad / 8) * (copad / 16);
-    // Chunks of output rows (n, od, oh): enough for ~1024 invocations (lavapipe spreads
-    // workgroups over its threads), and about 1024 positions or fewer each so the operands a
-    // workgroup streams stay in cache (2x on the 512->256 projection's weight gradient),
-    // never more chunks than there are rows.
-    let rows = g.n * g.output[0] * g.output[1];
-    let nchunks = 1024usize.div_ceil(columns).max((rows * g.output[2]).div_ceil(1024)).clamp(1, rows);
-    let chunk = rows.div_ceil(nchunks);
-    let nchunks = rows.div_ceil(chunk);
-    let part = gpu.scratch(&[nchunks, taps, cpad, copad])?;
-    let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, ..params(g, cpad) };
-    dispatch(gpu, pass, "conv_fast_backward_weight", p, &[Arg::R(&xp), Arg::R(&dyp), Arg::W(&part)], nchunks * columns)?;
-    dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
 }

@@ -131,6 +131,17 @@ pub(super) fn write_texels(
     gpu.copy_to_texture(pass, &staging, view)
 }
 
+/// Whether [`stage_x`] copies `x` into its stage with no dispatch: rows of whole staging rows
+/// (width a multiple of 64), where the stage's texels are x's vec4s in order (the first layer on
+/// a 64^3 grid, the heads at 64 or 128 wide), on a CPU adapter in a pass that can be split.
+/// There this pays whatever `copies_win` says of packings, which store each texel either way:
+/// the copy replaces a dispatch, its loads and its stores.
+pub(super) fn stage_copies(gpu: &Gpu, pass: &wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor) -> bool {
+    let iw = g.input[2];
+    let cpu = gpu.info.device_type == wgpu::DeviceType::Cpu;
+    iw % 4 == 0 && staging_pitch(iw / 4) == iw / 4 && x.offset().is_multiple_of(16) && cpu && gpu.can_split(pass)
+}
+
 /// `x` ([N, C, input...] of `g`) copied into a 3D texture of 4 voxels along W a texel, which
 /// the direct kernels read (see `conv_direct.wgsl`); `p` has `g`'s sizes.
 pub(super) fn stage_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor, p: &Params) -> Result<wgpu::TextureView> {
@@ -140,12 +151,7 @@ pub(super) fn stage_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry,
     if staged {
         return Ok(view);
     }
-    // Rows of whole staging rows: the stage's texels are x's vec4s in order, so x itself is
-    // copied in, with no dispatch (the first layer on a 64^3 grid). On a CPU adapter this
-    // pays whatever `copies_win` says of packings, which store each texel either way: here a
-    // copy replaces the dispatch, its loads and its stores.
-    let cpu = gpu.info.device_type == wgpu::DeviceType::Cpu;
-    if iw % 4 == 0 && staging_pitch(iw / 4) == iw / 4 && x.offset().is_multiple_of(16) && cpu && gpu.can_split(pass) {
+    if stage_copies(gpu, pass, g, x) {
         gpu.copy_to_texture(pass, x, &view)?;
         return Ok(view);
     }

@@ -13,6 +13,7 @@ pub mod concat;
 pub mod conv;
 pub mod conv_transpose;
 mod conv_fast;
+mod conv_fast_weight;
 mod conv_nchw;
 mod conv_operands;
 mod conv_pack;

@@ -1,0 +1,279 @@
+// prepend: conv_fast.wgsl, conv_tex.wgsl, conv_tex_pack.wgsl, conv_tex_weight.wgsl, conv_direct.wgsl
+// The direct kernels' weight gradients: they read the input where it is, in conv_direct.wgsl's
+// stage texture (4 voxels along W a texel), and dy packed as conv_tex_weight.wgsl's tiles read
+// it (bdy, dy_quads), and write its part layout (bpart) for conv_fast_weight_sum.
+
+// ---- weight gradient: lanes = 8 output columns; each lane 4 W taps x 8 output channels ----
+// dw[o, c, kd, kh, kw] = Σ dy[n, o, od, oh, ow] x[n, c, od*sd - pd + kd, oh*sh - ph + kh, ow*sw -
+// pw + kw]. A tile is (chunk of output rows, column = (kd, c, kh, chunk of 4 W taps, group of 8
+// output channels)); its 8 lanes walk the chunk's rows 8 output columns at a time, each reading
+// its own window (taps4, two stage texels) and its own 8 dy values (two texels of the dy texture
+// of conv_fast_pack_tex(_w4): dq quads per voxel), then the tile's lanes are summed by a
+// shuffle-xor butterfly and written to part[chunk][tap][cpad][co16 * 16] for conv_fast_weight_sum
+// (fold 1). No folded packing: the first layer's (1->8 5^3 s2 on 64^3) took about as long as the
+// gradient itself. Params: the conv's geometry; cpad = ceil(ci / 4) * 4; nchunks, chunk (rows per
+// chunk), total = tiles.
+struct Acc32 { lo: array<vec4<f32>, 4>, hi: array<vec4<f32>, 4> }
+
+fn bw_direct_step(acc: Acc32, x: vec4<f32>, dlo: vec4<f32>, dhi: vec4<f32>) -> Acc32 {
+    return Acc32(
+        array<vec4<f32>, 4>(acc.lo[0] + x.x * dlo, acc.lo[1] + x.y * dlo, acc.lo[2] + x.z * dlo, acc.lo[3] + x.w * dlo),
+        array<vec4<f32>, 4>(acc.hi[0] + x.x * dhi, acc.hi[1] + x.y * dhi, acc.hi[2] + x.z * dhi, acc.hi[3] + x.w * dhi));
+}
+
+// The sum of v over the 8 lanes of a tile (aligned groups of 8 in the subgroup).
+fn tile_sum(v: vec4<f32>) -> vec4<f32> {
+    let a = v + subgroupShuffleXor(v, 1u);
+    let b = a + subgroupShuffleXor(a, 2u);
+    return b + subgroupShuffleXor(b, 4u);
+}
+
+// Column of a weight-gradient tile: (kd, c, kh, first W tap, group of 8 output channels), of
+// `nkh` tap rows and `nkw` chunks of 4 W taps (p.kh and ceil(p.kw / 4), or 1 where a tile
+// takes every tap row or every W tap: kh = 0, kw0 = 0).
+struct DirectColumn { kd: u32, c: u32, kh: u32, kw0: u32, g: u32 }
+
+fn direct_column(col: u32, nkh: u32, nkw: u32) -> DirectColumn {
+    let groups = (p.co + 7u) / 8u;
+    var r = col;
+    let g = r % groups; r /= groups;
+    let kw0 = (r % nkw) * 4u; r /= nkw;
+    let kh = r % nkh; r /= nkh;
+    return DirectColumn(r / p.ci, r % p.ci, kh, kw0, g);
+}
+
+// dy of output channels g*8..g*8+7 at (n, od, oh, ow) (zero past the row or the channels):
+// two texels of the dy texture of conv_fast_pack_tex(_w4), dq quads per voxel.
+struct DyPair { lo: vec4<f32>, hi: vec4<f32> }
+
+fn dy_pair(g: u32, n: u32, od: u32, oh: u32, ow: u32) -> DyPair {
+    let dq = dy_quads();
+    let q1 = min(2u * g + 1u, dq - 1u);
+    let ok = ow < p.ow;
+    let dc = vec2<i32>(i32(min(ow, p.ow - 1u)), i32(oh));
+    let lo = textureLoad(bdy, vec3<i32>(dc, i32((n * dq + 2u * g) * p.od + od)));
+    let hi = textureLoad(bdy, vec3<i32>(dc, i32((n * dq + q1) * p.od + od)));
+    return DyPair(select(vec4<f32>(0.0), lo, ok), select(vec4<f32>(0.0), hi, ok && 2u * g + 1u < dq));
+}
+
+// Sums tap row kh's accumulators over the tile's lanes and writes lane l's share, tap
+// kw0 + l / 2 and output channels g * 8 + 4 * (l % 2)..+3, to part[chunk].
+fn put_direct_dw(acc: Acc32, k: DirectColumn, kh: u32, chunk: u32, lane: u32) {
+    var mine = vec4<f32>(0.0);
+    for (var kk = 0u; kk < 4u; kk++) {
+        let lo = tile_sum(acc.lo[kk]);
+        let hi = tile_sum(acc.hi[kk]);
+        mine = select(mine, lo, lane == 2u * kk);
+        mine = select(mine, hi, lane == 2u * kk + 1u);
+    }
+    let kw = k.kw0 + lane / 2u;
+    if (kw >= p.kw) { return; }
+    let taps = p.kd * p.kh * p.kw;
+    let tap = (k.kd * p.kh + kh) * p.kw + kw;
+    let copad = p.co16 * 16u;
+    let o = ((chunk * taps + tap) * p.cpad + k.c) * copad + k.g * 8u + 4u * (lane & 1u);
+    bpart[o] = mine.x;
+    bpart[o + 1u] = mine.y;
+    bpart[o + 2u] = mine.z;
+    bpart[o + 3u] = mine.w;
+}
+
+@compute @workgroup_size(64)
+fn conv_direct_backward_weight(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    if (tl.x >= p.total) { return; }
+    let lane = tl.y;
+    let cols = p.kd * p.ci * p.kh * ((p.kw + 3u) / 4u) * ((p.co + 7u) / 8u);
+    let k = direct_column(tl.x % cols, p.kh, (p.kw + 3u) / 4u);
+    let chunk = tl.x / cols;
+    let span = chunk_rows(chunk);
+    var acc: Acc32;
+    var w = walk_from(span.x);
+    let steps = walk_steps(span);
+    for (var i = 0u; i < steps; i++) {
+        let n = w.n; let od = w.od; let oh = w.oh; let ow0 = w.ow0;
+        let zd = i32(od * p.sd + k.kd) - i32(p.pd);
+        let zh = i32(oh * p.sh + k.kh) - i32(p.ph);
+        if (zd >= 0 && zd < i32(p.id) && zh >= 0 && zh < i32(p.ih)) {
+            let ow = ow0 + lane;
+            let d = dy_pair(k.g, n, od, oh, ow);
+            let x = taps4(n, k.c, zd, zh, i32(ow * p.sw + k.kw0) - i32(p.pw));
+            acc = bw_direct_step(acc, x, d.lo, d.hi);
+        }
+        w = walk_next(w);
+    }
+    put_direct_dw(acc, k, k.kh, chunk, lane);
+}
+
+// Tap row kh's fifth W tap: sums its accumulators (x.x times dy) over the tile's lanes; lanes 0
+// and 1 write output channels g * 8..+3 and g * 8 + 4..+7 of tap (kd, kh, 4) to part[chunk].
+fn put_direct_dw_tap4(b: Acc8, k: DirectColumn, kh: u32, chunk: u32, lane: u32) {
+    let lo = tile_sum(b.a0);
+    let hi = tile_sum(b.a1);
+    if (lane >= 2u) { return; }
+    let v = select(lo, hi, lane == 1u);
+    let tap = (k.kd * p.kh + kh) * p.kw + 4u;
+    let o = ((chunk * p.kd * p.kh * p.kw + tap) * p.cpad + k.c) * (p.co16 * 16u) + k.g * 8u + 4u * lane;
+    bpart[o] = v.x;
+    bpart[o + 1u] = v.y;
+    bpart[o + 2u] = v.z;
+    bpart[o + 3u] = v.w;
+}
+
+// x (in .x) times the 8 channels of dy.
+fn bw_tap1_step(b: Acc8, x: vec4<f32>, d: DyPair) -> Acc8 {
+    return Acc8(b.a0 + x.x * d.lo, b.a1 + x.x * d.hi);
+}
+
+// The same for 5 x 5 taps (H x W: the first layer's 5^3), a tile taking them all: each dy pair
+// fetched feeds 5 tap rows' windows of 4 W taps and their fifth taps alone (17 texel fetches
+// for 200 multiply-adds, against 40 fetches for 320, 120 of them on zero-weight taps), and
+// the tap rows off the grid read zeros from taps4 and tap1 instead of being skipped.
+@compute @workgroup_size(64)
+fn conv_direct_backward_weight_k5(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    if (tl.x >= p.total) { return; }
+    let lane = tl.y;
+    let cols = p.kd * p.ci * ((p.co + 7u) / 8u);
+    let k = direct_column(tl.x % cols, 1u, 1u);
+    let chunk = tl.x / cols;
+    let span = chunk_rows(chunk);
+    var a0: Acc32; var a1: Acc32; var a2: Acc32; var a3: Acc32; var a4: Acc32;
+    var b0: Acc8; var b1: Acc8; var b2: Acc8; var b3: Acc8; var b4: Acc8;
+    var w = walk_from(span.x);
+    let steps = walk_steps(span);
+    for (var i = 0u; i < steps; i++) {
+        let n = w.n; let od = w.od; let oh = w.oh; let ow0 = w.ow0;
+        let zd = i32(od * p.sd + k.kd) - i32(p.pd);
+        let zh = i32(oh * p.sh) - i32(p.ph);
+        if (zd >= 0 && zd < i32(p.id)) {
+            let ow = ow0 + lane;
+            let d = dy_pair(k.g, n, od, oh, ow);
+            let ws = i32(ow * p.sw) - i32(p.pw);
+            a0 = bw_direct_step(a0, taps4(n, k.c, zd, zh, ws), d.lo, d.hi);
+            a1 = bw_direct_step(a1, taps4(n, k.c, zd, zh + 1, ws), d.lo, d.hi);
+            a2 = bw_direct_step(a2, taps4(n, k.c, zd, zh + 2, ws), d.lo, d.hi);
+            a3 = bw_direct_step(a3, taps4(n, k.c, zd, zh + 3, ws), d.lo, d.hi);
+            a4 = bw_direct_step(a4, taps4(n, k.c, zd, zh + 4, ws), d.lo, d.hi);
+            b0 = bw_tap1_step(b0, tap1(n, k.c, zd, zh, ws + 4), d);
+            b1 = bw_tap1_step(b1, tap1(n, k.c, zd, zh + 1, ws + 4), d);
+            b2 = bw_tap1_step(b2, tap1(n, k.c, zd, zh + 2, ws + 4), d);
+            b3 = bw_tap1_step(b3, tap1(n, k.c, zd, zh + 3, ws + 4), d);
+            b4 = bw_tap1_step(b4, tap1(n, k.c, zd, zh + 4, ws + 4), d);
+        }
+        w = walk_next(w);
+    }
+    put_direct_dw(a0, k, 0u, chunk, lane);
+    put_direct_dw(a1, k, 1u, chunk, lane);
+    put_direct_dw(a2, k, 2u, chunk, lane);
+    put_direct_dw(a3, k, 3u, chunk, lane);
+    put_direct_dw(a4, k, 4u, chunk, lane);
+    put_direct_dw_tap4(b0, k, 0u, chunk, lane);
+    put_direct_dw_tap4(b1, k, 1u, chunk, lane);
+    put_direct_dw_tap4(b2, k, 2u, chunk, lane);
+    put_direct_dw_tap4(b3, k, 3u, chunk, lane);
+    put_direct_dw_tap4(b4, k, 4u, chunk, lane);
+}
+
+
+// ---- weight gradient, three W taps a lane on the stage (kw = 3, sw = 1, at most 8 outputs) --
+// The narrow heads' (16 -> 3 or 5, 3x3) weight gradient without packing x: a lane owns a tap row
+// r = (kd, kh) and one input channel c (pair r * ci + c) with its 3 W taps, for 4 output
+// channels (`_w3`) or 8 (`_w3x8`). Per step of 8 output columns it fetches the 4 stage texels
+// (16 W voxels) that hold the 10 its 8 positions x 3 taps read; dy comes as in the tiles of
+// conv_tex_weight.wgsl (a texel a lane, handed around by shuffles). The channel-quad tiles there
+// fetch fewer texels per multiply-add but need x packed, a texture store per texel (~13x a
+// fetch on lavapipe, `rendernet bench --operands`), where src/ops/conv_pack.rs copies x into
+// the stage with no dispatch when its rows are whole staging rows. Writes part like the tiles
+// (the three taps are consecutive rows). Params: the conv's geometry; cpad = ceil(ci / 4) * 4;
+// nchunks, chunk (rows per chunk), total = tiles.
+fn stage_lane3(tl: vec3<u32>) -> BwLane {
+    let rows = p.kd * p.kh;
+    let groups = (rows * p.ci + 7u) / 8u;
+    let pair = (tl.x % groups) * 8u + tl.y;
+    let bp = BwPair(tl.x / groups, 0u, pair, min(pair / p.ci, rows - 1u) * 3u, pair % p.ci);
+    return BwLane(bp, pair < rows * p.ci, tap_axes(bp.tap), chunk_rows(bp.chunk), tl.y, tl.z);
+}
+
+// W voxels ow0 - pw .. ow0 - pw + 11 of the lane's row and channel at the step (s0.x first).
+struct Xs12 { s0: vec4<f32>, s1: vec4<f32>, s2: vec4<f32> }
+
+fn stage_xs12(w: Walk, b: BwLane) -> Xs12 {
+    let z = walk_z(w, b.k);
+    let ws = i32(w.ow0) - i32(p.pw);
+    let j = ws >> 2u;
+    let off = u32(ws & 3);
+    let n = w.n; let c = b.bp.q;
+    let v0 = stage_texel(n, c, z.x, z.y, j);
+    let v1 = stage_texel(n, c, z.x, z.y, j + 1);
+    let v2 = stage_texel(n, c, z.x, z.y, j + 2);
+    let v3 = stage_texel(n, c, z.x, z.y, j + 3);
+    return Xs12(window4(v0, v1, off), window4(v1, v2, off), window4(v2, v3, off));
+}
+
+// The three taps' accumulators of 4 output channels.
+struct Acc3 { t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32> }
+
+// Position j of the step: taps 0, 1, 2 read x0, x1, x2; d its dy.
+fn mac3(a: Acc3, x0: f32, x1: f32, x2: f32, d: vec4<f32>) -> Acc3 {
+    return Acc3(a.t0 + x0 * d, a.t1 + x1 * d, a.t2 + x2 * d);
+}
+
+// A step's 8 positions on x (`stage_xs12`) and the dy texels the lanes fetched (g, shuffled
+// from lane base + j for position j).
+fn mac3_step(a: Acc3, x: Xs12, g: vec4<f32>, base: u32) -> Acc3 {
+    var r = mac3(a, x.s0.x, x.s0.y, x.s0.z, subgroupShuffle(g, base));
+    r = mac3(r, x.s0.y, x.s0.z, x.s0.w, subgroupShuffle(g, base + 1u));
+    r = mac3(r, x.s0.z, x.s0.w, x.s1.x, subgroupShuffle(g, base + 2u));
+    r = mac3(r, x.s0.w, x.s1.x, x.s1.y, subgroupShuffle(g, base + 3u));
+    r = mac3(r, x.s1.x, x.s1.y, x.s1.z, subgroupShuffle(g, base + 4u));
+    r = mac3(r, x.s1.y, x.s1.z, x.s1.w, subgroupShuffle(g, base + 5u));
+    r = mac3(r, x.s1.z, x.s1.w, x.s2.x, subgroupShuffle(g, base + 6u));
+    return mac3(r, x.s1.w, x.s2.x, x.s2.y, subgroupShuffle(g, base + 7u));
+}
+
+// dw of the lane's channel at its row's three taps, output channels col..col + 3.
+fn put_stage_dw3(b: BwLane, a: Acc3, col: u32) {
+    let copad = p.co16 * 16u;
+    let o = ((b.bp.chunk * p.kd * p.kh * p.kw + b.bp.tap) * p.cpad + b.bp.q) * copad + col;
+    let next = p.cpad * copad;
+    put_dw(o, 0u, 1u, a.t0);
+    put_dw(o + next, 0u, 1u, a.t1);
+    put_dw(o + 2u * next, 0u, 1u, a.t2);
+}
+
+@compute @workgroup_size(64)
+fn conv_direct_backward_weight_w3(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    if (tl.x >= p.total) { return; }
+    let b = stage_lane3(tl);
+    var a = Acc3(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    var w = walk_from(b.span.x);
+    let steps = walk_steps(b.span);
+    for (var i = 0u; i < steps; i++) {
+        a = mac3_step(a, stage_xs12(w, b), dy_texel(w, b.lane, 0u), b.base);
+        w = walk_next(w);
+    }
+    if (!b.live) { return; }
+    put_stage_dw3(b, a, 0u);
+}
+
+@compute @workgroup_size(64)
+fn conv_direct_backward_weight_w3x8(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    if (tl.x >= p.total) { return; }
+    let b = stage_lane3(tl);
+    var lo = Acc3(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    var hi = lo;
+    var w = walk_from(b.span.x);
+    let steps = walk_steps(b.span);
+    for (var i = 0u; i < steps; i++) {
+        let x = stage_xs12(w, b);
+        lo = mac3_step(lo, x, dy_texel(w, b.lane, 0u), b.base);
+        hi = mac3_step(hi, x, dy_texel(w, b.lane, 1u), b.base);
+        w = walk_next(w);
+    }
+    if (!b.live) { return; }
+    put_stage_dw3(b, lo, 0u);
+    put_stage_dw3(b, hi, 4u);
+}

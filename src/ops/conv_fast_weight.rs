@@ -1,0 +1,172 @@
+//! The tiled conv kernels' weight gradients (`conv_fast`): on textures, the channel-quad tiles of
+//! `conv_tex_weight.wgsl` and the direct kernels of `conv_direct_weight.wgsl`, which read x in
+//! place in its stage texture; else the buffer family's tile. Each adds partial sums per chunk of
+//! output rows that `conv_fast_weight_sum` then adds in a fixed order.
+
+use super::conv::{Geometry, Params};
+use super::conv_fast::{Folded, Operands, TEX_SHADER, dispatch, direct_fits, fold, params, volume, x_texture_fits, textures_wanted};
+use super::conv_pack::{Packed, pack_folded, pack_input, pack_x, stage_copies, stage_x};
+use crate::error::Result;
+use crate::gpu::{Gpu, Tensor, grid_1d, Arg};
+
+/// `dy` packed as the texture kernels pack an input: dy's channels over the output extent
+/// (at most 4 channels: one quad per voxel, for the 4-channel kernel).
+fn pack_dy_tex(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, dy: &Tensor) -> Result<Packed> {
+    let dy_geom = Geometry { ci: g.co, input: g.output, ..*g };
+    pack_x(gpu, pass, &dy_geom, &Folded::none(dy_geom), dy, dy_tex_channels(g), true)
+}
+
+/// Channels of dy as packed for the texture weight gradient (part keeps `copad`): 4 or 8
+/// for the narrow kernels, which then share the packing of [`backward_input`] (`backward`),
+/// else whole groups of 16. The shaders' `dy_quads` reads it back.
+fn dy_tex_channels(g: &Geometry) -> usize {
+    if g.co <= 8 { g.co.div_ceil(4) * 4 } else { g.co.div_ceil(16) * 16 }
+}
+
+/// Whether `backward_weight` of `g` runs on textures for `ops`, with the fold and packed
+/// input channels it uses and dy's packed channels.
+pub(super) fn weight_textures(gpu: &Gpu, g: &Geometry, ops: Operands) -> Option<(Folded, usize, usize)> {
+    let f = fold(g, 4);
+    let cpad = f.g.ci.div_ceil(4) * 4;
+    // Two activation textures (x folded or staged, dy) and no weight texture.
+    let x_fits = if f.fold() > 1 { direct_fits(gpu, ops, g, &f) } else { x_texture_fits(gpu, g.n, cpad, f.g.input) };
+    let fits = textures_wanted(gpu, ops) && x_fits && x_texture_fits(gpu, g.n, dy_tex_channels(g), g.output);
+    fits.then(|| (f, cpad, dy_tex_channels(g)))
+}
+
+/// `backward_weight` on textures (see `conv_fast_backward_weight_tex`), dy packed by
+/// [`pack_dy_tex`].
+#[allow(clippy::too_many_arguments)]
+pub(super) fn backward_weight_tex(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    f: &Folded,
+    x: &Tensor,
+    dyp: &Packed,
+    dw: &Tensor,
+    cpad: usize,
+) -> Result<()> {
+    if f.fold() > 1 || stage_w3(gpu, pass, g, x) {
+        return backward_weight_direct(gpu, pass, g, x, dyp, dw, f.fold() == 1);
+    }
+    let xp = pack_x(gpu, pass, g, f, x, cpad, true)?;
+    let copad = g.co.div_ceil(16) * 16;
+    let g = &f.g;
+    let taps = volume(g.kernel);
+    // Three W taps a lane where they read overlapping x (`_w3`), 8 output channels a lane at
+    // most; past 8 only with 4+ input channel quads (README "Three W taps a lane", an AMD Zen 4).
+    let w3 = g.kernel[2] == 3 && g.stride[2] == 1 && (g.co <= 8 || cpad >= 16);
+    let (lane_taps, co_groups) = if w3 { (taps / 3, g.co.div_ceil(8)) } else { (taps, copad / 16) };
+    let groups = (lane_taps * cpad / 4).div_ceil(8) * co_groups;
+    let (chunk, nchunks) = weight_chunks(gpu, g.n * g.output[0] * g.output[1], groups, 128);
+    let part = gpu.scratch(&[nchunks, taps, cpad, copad])?;
+    let tiles = nchunks * groups;
+    let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, total: tiles as u32, ..params(g, cpad) };
+    let args = [xp.arg(), dyp.arg(), Arg::W(&part)];
+    // One or two dy texels a position instead of four where there are at most 4 or 8 outputs.
+    let entry = match (g.co, w3) {
+        (..=4, false) => "conv_fast_backward_weight_tex4",
+        (..=4, true) => "conv_fast_backward_weight_tex4_w3",
+        (5..=8, false) => "conv_fast_backward_weight_tex8",
+        (_, true) => "conv_fast_backward_weight_tex8_w3",
+        _ => "conv_fast_backward_weight_tex",
+    };
+    gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
+    dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
+}
+
+/// The chunks of `rows` output rows a weight-gradient dispatch of `per_chunk` tiles a chunk
+/// splits them into, as (rows a chunk, chunks); never more chunks than rows. Each chunk adds a
+/// partial sum that `conv_fast_weight_sum` reads back with storage loads (on lavapipe 22.3 a
+/// loop over the 8 lanes each), so more chunks spread the tiles over more threads but cost
+/// more in the sum. On a CPU adapter the dispatch aims at 16 tiles per CPU thread (lavapipe
+/// runs one thread per CPU): on a 2-core AMD EPYC Zen 3 this took the weight gradients of the
+/// tiny preset's training shapes 5-26% faster (medians) than the 128-256 tiles before (README
+/// "Fewer chunks in the weight gradients") and left the large ones unchanged; elsewhere at
+/// `gpu_tiles`.
+fn weight_chunks(gpu: &Gpu, rows: usize, per_chunk: usize, gpu_tiles: usize) -> (usize, usize) {
+    // Read once: on Linux the thread count comes from cgroup files, and this runs per recording.
+    static CPU_TILES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    let tiles = if gpu.info.device_type == wgpu::DeviceType::Cpu {
+        *CPU_TILES.get_or_init(|| 16 * std::thread::available_parallelism().map_or(2, |n| n.get()))
+    } else {
+        gpu_tiles
+    };
+    let chunk = rows.div_ceil(tiles.div_ceil(per_chunk).clamp(1, rows));
+    (chunk, rows.div_ceil(chunk))
+}
+
+/// Whether `g` has the shape of `conv_direct_backward_weight_w3`: 3 W taps at column stride 1,
+/// at most 8 output channels (the narrow heads).
+fn w3_shape(g: &Geometry) -> bool {
+    g.kernel[2] == 3 && g.stride[2] == 1 && g.co <= 8
+}
+
+/// Whether the weight gradient of `g` (not folded) reads x in place in its stage
+/// (`conv_direct_backward_weight_w3`) rather than packed by channel quads: a [`w3_shape`] whose x
+/// is copied into the stage with no dispatch (`stage_copies`) and fits it. On an AMD Zen 4 the
+/// 16 -> 3 head at 128 x 128 took ... (README "The heads' weight gradient on the stage").
+fn stage_w3(gpu: &Gpu, pass: &wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor) -> bool {
+    w3_shape(g) && stage_copies(gpu, pass, g, x) && x_texture_fits(gpu, g.n, 4 * g.ci, g.input)
+}
+
+/// The weight gradient of a conv the texture family would fold (few input channels), without
+/// folding, or where `w3`, of a [`stage_w3`] conv: `conv_direct_backward_weight*` read the
+/// staged input in place (see their shader).
+fn backward_weight_direct(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor, dyp: &Packed, dw: &Tensor, w3: bool) -> Result<()> {
+    let cpad = g.ci.div_ceil(4) * 4;
+    let p = params(g, cpad);
+    let stage = stage_x(gpu, pass, g, x, &p)?;
+    // Tiles a chunk: of 8 (tap row, channel) pairs (`_w3`), or of 8 output columns per
+    // column of taps; 5 x 5 taps (the first layer): `_k5` tiles take them all, sharing each dy fetch.
+    let k5 = g.kernel[1] == 5 && g.kernel[2] == 5;
+    let (entry, cols) = match (w3, k5) {
+        (true, _) => (if g.co <= 4 { "conv_direct_backward_weight_w3" } else { "conv_direct_backward_weight_w3x8" }, (g.kernel[0] * g.kernel[1] * g.ci).div_ceil(8)),
+        (false, true) => ("conv_direct_backward_weight_k5", g.kernel[0] * g.ci * g.co.div_ceil(8)),
+        (false, false) => ("conv_direct_backward_weight", g.kernel[0] * g.ci * g.kernel[1] * g.kernel[2].div_ceil(4) * g.co.div_ceil(8)),
+    };
+    let (chunk, nchunks) = weight_chunks(gpu, g.n * g.output[0] * g.output[1], cols, 256);
+    let part = gpu.scratch(&[nchunks, volume(g.kernel), cpad, g.co.div_ceil(16) * 16])?;
+    let tiles = nchunks * cols;
+    let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, total: tiles as u32, ..p };
+    let args = [Arg::ReadStorageTexture(&stage, wgpu::TextureViewDimension::D3), dyp.arg(), Arg::W(&part)];
+    gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
+    dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
+}
+
+/// Tiled `dw[co, ci, k] = Σ dy[n, co, o] x[n, ci, o*s - pad + k]`: partial sums per chunk of
+/// output rows, then a fixed-order sum over chunks (deterministic, no atomics).
+pub(crate) fn backward_weight(
+    gpu: &Gpu,
+    pass: &mut wgpu::ComputePass<'_>,
+    g: &Geometry,
+    x: &Tensor,
+    dy: &Tensor,
+    dw: &Tensor,
+    ops: Operands,
+) -> Result<()> {
+    if let Some((f, cpad, _)) = weight_textures(gpu, g, ops) {
+        let dyp = pack_dy_tex(gpu, pass, g, dy)?;
+        return backward_weight_tex(gpu, pass, g, &f, x, &dyp, dw, cpad);
+    }
+    let f = fold(g, 8);
+    let (cpad, copad) = (f.g.ci.div_ceil(8) * 8, g.co.div_ceil(16) * 16);
+    let xp = pack_folded(gpu, pass, g, &f, x, cpad)?;
+    let g = &f.g;
+    let dyp = pack_input(gpu, pass, dy, g.n, g.co, g.output, copad)?;
+    let taps = volume(g.kernel);
+    let columns = taps * (cpad / 8) * (copad / 16);
+    // Chunks of output rows (n, od, oh): enough for ~1024 invocations (lavapipe spreads
+    // workgroups over its threads), and about 1024 positions or fewer each so the operands a
+    // workgroup streams stay in cache (2x on the 512->256 projection's weight gradient),
+    // never more chunks than there are rows.
+    let rows = g.n * g.output[0] * g.output[1];
+    let nchunks = 1024usize.div_ceil(columns).max((rows * g.output[2]).div_ceil(1024)).clamp(1, rows);
+    let chunk = rows.div_ceil(nchunks);
+    let nchunks = rows.div_ceil(chunk);
+    let part = gpu.scratch(&[nchunks, taps, cpad, copad])?;
+    let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, ..params(g, cpad) };
+    dispatch(gpu, pass, "conv_fast_backward_weight", p, &[Arg::R(&xp), Arg::R(&dyp), Arg::W(&part)], nchunks * columns)?;
+    dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
+}
