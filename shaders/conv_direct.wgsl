@@ -103,10 +103,23 @@ fn conv_direct_stage_window_buf(@builtin(global_invocation_id) gid: vec3<u32>) {
 // Texel j (W voxels 4j..4j+3) of row zh at depth zd of input channel c of item n in the stage,
 // zero off the grid.
 fn stage_texel(n: u32, c: u32, zd: i32, zh: i32, j: i32) -> vec4<f32> {
-    let inside = zd >= 0 && zd < i32(p.id) && zh >= 0 && zh < i32(p.ih) && j >= 0 && j < i32((p.iw + 3u) / 4u);
+    return stage_row_texel(stage_row(n, c, zd, zh), j);
+}
+
+// Row zh at depth zd of channel c of item n in the stage: (row, layer) clamped to the grid, and
+// whether it is on it.
+struct StageRow { y: i32, layer: i32, inside: bool }
+
+fn stage_row(n: u32, c: u32, zd: i32, zh: i32) -> StageRow {
     let layer = (i32(n * p.ci + c) * i32(p.id)) + clamp(zd, 0, i32(p.id) - 1);
-    let at = vec3<i32>(clamp(j, 0, i32((p.iw + 3u) / 4u) - 1), clamp(zh, 0, i32(p.ih) - 1), layer);
-    return select(vec4<f32>(0.0), textureLoad(tx, at), inside);
+    return StageRow(clamp(zh, 0, i32(p.ih) - 1), layer, zd >= 0 && zd < i32(p.id) && zh >= 0 && zh < i32(p.ih));
+}
+
+// Texel j of stage row r, zero off the grid.
+fn stage_row_texel(r: StageRow, j: i32) -> vec4<f32> {
+    let w4n = i32((p.iw + 3u) / 4u);
+    let at = vec3<i32>(clamp(j, 0, w4n - 1), r.y, r.layer);
+    return select(vec4<f32>(0.0), textureLoad(tx, at), r.inside && j >= 0 && j < w4n);
 }
 
 // Values off..off+3 of the 8 values of texels a, b (off in 0..3): a lane's 4 W taps.

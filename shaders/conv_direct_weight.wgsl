@@ -176,51 +176,88 @@ fn conv_direct_backward_weight_k5(ids: LaneIds) {
 }
 
 
-// ---- weight gradient, three W taps a lane on the stage (kw = 3, sw = 1, at most 8 outputs) --
-// The narrow heads' (16 -> 3 or 5, 3x3) weight gradient without packing x: a lane owns a tap row
-// r = (kd, kh) and one input channel c (pair r * ci + c) with its 3 W taps, for 4 output
-// channels (`_w3`) or 8 (`_w3x8`). Per step of 8 output columns it fetches the 4 stage texels
-// (16 W voxels) that hold the 10 its 8 positions x 3 taps read; dy comes as in the tiles of
-// conv_tex_weight.wgsl (a texel a lane, handed around by shuffles). The channel-quad tiles there
-// fetch fewer texels per multiply-add but need x packed, a texture store per texel (~13x a
-// fetch on lavapipe, `rendernet bench --operands`), where src/ops/conv_pack.rs copies x into
-// the stage with no dispatch when its rows are whole staging rows. Writes part like the tiles
-// (the three taps are consecutive rows). Params: the conv's geometry; cpad = ceil(ci / 4) * 4;
-// nchunks, chunk (rows per chunk), total = tiles.
-fn stage_lane3(tl: vec3<u32>) -> BwLane {
-    let rows = p.kd * p.kh;
-    let groups = (rows * p.ci + 7u) / 8u;
-    let pair = (tl.x % groups) * 8u + tl.y;
-    let bp = BwPair(tl.x / groups, 0u, pair, min(pair / p.ci, rows - 1u) * 3u, pair % p.ci);
-    return BwLane(bp, pair < rows * p.ci, tap_axes(bp.tap), chunk_rows(bp.chunk), tl.y, tl.z);
+// ---- weight gradient, 3 x 3 taps a lane on the stage (kh = kw = 3, sh = sw = 1, <= 8 outputs) --
+// The narrow heads' (16 -> 3 or 5, 3x3) weight gradient without packing x: a lane owns a depth
+// tap kd and one input channel c (pair kd * ci + c) with its 3 x 3 (H, W) taps, for 4 output
+// channels (`_w3`) or 8 (`_w3x8`), and walks strips of 8 output columns down their rows. A step
+// (a row of a strip) reads 3 input rows, 2 of which the step before read: it fetches one row's 3
+// stage texels (12 W voxels: the strip starts `lead` columns early so that they are whole
+// texels), keeps the other two from the step before, and multiplies them by the 8 positions'
+// dy, which comes as in the tiles of conv_tex_weight.wgsl (a texel a lane, handed around by
+// shuffles): 3 texel fetches for 288 multiply-adds. The channel-quad tiles there need x packed,
+// a texture store per texel (~13x a fetch on lavapipe, `rendernet bench --operands`), where
+// src/ops/conv_pack.rs copies x into the stage with no dispatch when its rows are whole staging
+// rows. Writes part like the tiles. Params: the conv's geometry; cpad = ceil(ci / 4) * 4;
+// nchunks, chunk (strip rows per chunk: n * od * strips * oh in all), total = tiles.
+
+// Columns a strip starts before its first output column: pw + lead is a multiple of 4.
+fn stage_lead() -> u32 {
+    return (4u - p.pw % 4u) % 4u;
 }
 
-// W voxels ow0 - pw .. ow0 - pw + 11 of the lane's row and channel at the step (s0.x first).
+// Strips of 8 output columns a row (the first `lead` columns early).
+fn stage_strips() -> u32 {
+    return (p.ow + stage_lead() + 7u) / 8u;
+}
+
+// A step: output row oh of strip s at depth od of item n.
+struct StripWalk { n: u32, od: u32, s: u32, oh: u32 }
+
+fn strip_walk_from(row: u32) -> StripWalk {
+    let strips = stage_strips();
+    return StripWalk(row / (p.oh * strips * p.od), (row / (p.oh * strips)) % p.od, (row / p.oh) % strips, row % p.oh);
+}
+
+fn strip_walk_next(w: StripWalk) -> StripWalk {
+    let oh = w.oh + 1u;
+    let wh = oh == p.oh;
+    let s = w.s + u32(wh);
+    let ws = s == stage_strips();
+    let od = w.od + u32(ws);
+    let wd = od == p.od;
+    return StripWalk(w.n + u32(wd), select(od, 0u, wd), select(s, 0u, ws), select(oh, 0u, wh));
+}
+
+// The lane's pair (BwLane's q: the channel, tap: its first tap (kd, 0, 0)) and its chunk's
+// strip rows.
+fn stage_lane(tl: vec3<u32>) -> BwLane {
+    let pairs = p.kd * p.ci;
+    let groups = (pairs + 7u) / 8u;
+    let pair = (tl.x % groups) * 8u + tl.y;
+    let chunk = tl.x / groups;
+    let bp = BwPair(chunk, 0u, pair, min(pair / p.ci, p.kd - 1u) * 9u, pair % p.ci);
+    let begin = chunk * p.chunk;
+    let span = vec2<u32>(begin, min(begin + p.chunk, p.n * p.od * stage_strips() * p.oh));
+    return BwLane(bp, pair < pairs, tap_axes(bp.tap), span, tl.y, tl.z);
+}
+
+// W voxels 8 s - lead - pw .. + 11 of input row zh at depth zd of the lane's channel (s0.x
+// first): 3 whole texels.
 struct Xs12 { s0: vec4<f32>, s1: vec4<f32>, s2: vec4<f32> }
 
-fn stage_xs12(w: Walk, b: BwLane) -> Xs12 {
-    let z = walk_z(w, b.k);
-    let ws = i32(w.ow0) - i32(p.pw);
-    let j = ws >> 2u;
-    let off = u32(ws & 3);
-    let n = w.n; let c = b.bp.q;
-    let v0 = stage_texel(n, c, z.x, z.y, j);
-    let v1 = stage_texel(n, c, z.x, z.y, j + 1);
-    let v2 = stage_texel(n, c, z.x, z.y, j + 2);
-    let v3 = stage_texel(n, c, z.x, z.y, j + 3);
-    return Xs12(window4(v0, v1, off), window4(v1, v2, off), window4(v2, v3, off));
+fn stage_xs12(w: StripWalk, b: BwLane, zd: i32, zh: i32) -> Xs12 {
+    let r = stage_row(w.n, b.bp.q, zd, zh);
+    let j = i32(2u * w.s) - i32((stage_lead() + p.pw) / 4u);
+    return Xs12(stage_row_texel(r, j), stage_row_texel(r, j + 1), stage_row_texel(r, j + 2));
 }
 
-// The three taps' accumulators of 4 output channels.
+// The lane's dy texel of quad `quad` for the step: column 8 s - lead + lane (wrapping below 0:
+// dy_texel reads zero there).
+fn strip_dy(w: StripWalk, b: BwLane, quad: u32) -> vec4<f32> {
+    return dy_texel(Walk(w.n, w.od, w.oh, 8u * w.s), b.lane - stage_lead(), quad);
+}
+
+// The three W taps' accumulators of 4 output channels, and a lane's 3 x 3.
 struct Acc3 { t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32> }
+struct Acc9 { h0: Acc3, h1: Acc3, h2: Acc3 }
 
 // Position j of the step: taps 0, 1, 2 read x0, x1, x2; d its dy.
 fn mac3(a: Acc3, x0: f32, x1: f32, x2: f32, d: vec4<f32>) -> Acc3 {
     return Acc3(a.t0 + x0 * d, a.t1 + x1 * d, a.t2 + x2 * d);
 }
 
-// A step's 8 positions on x (`stage_xs12`) and the dy texels the lanes fetched (g, shuffled
-// from lane base + j for position j).
+// A step's 8 positions on one input row x and the dy texels the lanes fetched (g, shuffled from
+// lane base + j for position j).
 fn mac3_step(a: Acc3, x: Xs12, g: vec4<f32>, base: u32) -> Acc3 {
     var r = mac3(a, x.s0.x, x.s0.y, x.s0.z, subgroupShuffle(g, base));
     r = mac3(r, x.s0.y, x.s0.z, x.s0.w, subgroupShuffle(g, base + 1u));
@@ -232,48 +269,80 @@ fn mac3_step(a: Acc3, x: Xs12, g: vec4<f32>, base: u32) -> Acc3 {
     return mac3(r, x.s1.w, x.s2.x, x.s2.y, subgroupShuffle(g, base + 7u));
 }
 
-// dw of the lane's channel at its row's three taps, output channels col..col + 3.
-fn put_stage_dw3(b: BwLane, a: Acc3, col: u32) {
+// The step's 3 input rows (tap rows kh = 0, 1, 2) with one dy texel.
+fn mac9_step(a: Acc9, x0: Xs12, x1: Xs12, x2: Xs12, g: vec4<f32>, base: u32) -> Acc9 {
+    return Acc9(mac3_step(a.h0, x0, g, base), mac3_step(a.h1, x1, g, base), mac3_step(a.h2, x2, g, base));
+}
+
+// The input rows of a step: rows oh - ph + 0, 1, 2 at the lane's depth tap.
+struct Rows3 { x0: Xs12, x1: Xs12, x2: Xs12 }
+
+// The step's rows: the last two of the step before (`prev`) unless the strip starts here
+// (`fresh`), and the third fetched. A branch the tile's lanes all take or all skip.
+fn strip_rows(w: StripWalk, b: BwLane, prev: Rows3, fresh: bool) -> Rows3 {
+    let zd = i32(w.od * p.sd + b.k.x) - i32(p.pd);
+    let zh = i32(w.oh) - i32(p.ph);
+    var r = Rows3(prev.x1, prev.x2, stage_xs12(w, b, zd, zh + 2));
+    if (fresh) {
+        r.x0 = stage_xs12(w, b, zd, zh);
+        r.x1 = stage_xs12(w, b, zd, zh + 1);
+    }
+    return r;
+}
+
+// dw of the lane's channel at taps (kd, kh, 0..2), output channels col..col + 3.
+fn put_stage_dw3(b: BwLane, kh: u32, a: Acc3, col: u32) {
     let copad = p.co16 * 16u;
-    let o = ((b.bp.chunk * p.kd * p.kh * p.kw + b.bp.tap) * p.cpad + b.bp.q) * copad + col;
+    let o = ((b.bp.chunk * p.kd * 9u + b.bp.tap + 3u * kh) * p.cpad + b.bp.q) * copad + col;
     let next = p.cpad * copad;
     put_dw(o, 0u, 1u, a.t0);
     put_dw(o + next, 0u, 1u, a.t1);
     put_dw(o + 2u * next, 0u, 1u, a.t2);
 }
 
+fn put_stage_dw9(b: BwLane, a: Acc9, col: u32) {
+    put_stage_dw3(b, 0u, a.h0, col);
+    put_stage_dw3(b, 1u, a.h1, col);
+    put_stage_dw3(b, 2u, a.h2, col);
+}
+
 @compute @workgroup_size(64)
 fn conv_direct_backward_weight_w3(ids: LaneIds) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
-    let b = stage_lane3(tl);
-    var a = Acc3(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
-    var w = walk_from(b.span.x);
-    let steps = walk_steps(b.span);
-    for (var i = 0u; i < steps; i++) {
-        a = mac3_step(a, stage_xs12(w, b), dy_texel(w, b.lane, 0u), b.base);
-        w = walk_next(w);
+    let b = stage_lane(tl);
+    var a: Acc9;
+    var x: Rows3;
+    var w = strip_walk_from(b.span.x);
+    var fresh = true;
+    for (var i = b.span.x; i < b.span.y; i++) {
+        x = strip_rows(w, b, x, fresh);
+        a = mac9_step(a, x.x0, x.x1, x.x2, strip_dy(w, b, 0u), b.base);
+        w = strip_walk_next(w);
+        fresh = w.oh == 0u;
     }
     if (!b.live) { return; }
-    put_stage_dw3(b, a, 0u);
+    put_stage_dw9(b, a, 0u);
 }
 
 @compute @workgroup_size(64)
 fn conv_direct_backward_weight_w3x8(ids: LaneIds) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
-    let b = stage_lane3(tl);
-    var lo = Acc3(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
-    var hi = lo;
-    var w = walk_from(b.span.x);
-    let steps = walk_steps(b.span);
-    for (var i = 0u; i < steps; i++) {
-        let x = stage_xs12(w, b);
-        lo = mac3_step(lo, x, dy_texel(w, b.lane, 0u), b.base);
-        hi = mac3_step(hi, x, dy_texel(w, b.lane, 1u), b.base);
-        w = walk_next(w);
+    let b = stage_lane(tl);
+    var lo: Acc9;
+    var hi: Acc9;
+    var x: Rows3;
+    var w = strip_walk_from(b.span.x);
+    var fresh = true;
+    for (var i = b.span.x; i < b.span.y; i++) {
+        x = strip_rows(w, b, x, fresh);
+        lo = mac9_step(lo, x.x0, x.x1, x.x2, strip_dy(w, b, 0u), b.base);
+        hi = mac9_step(hi, x.x0, x.x1, x.x2, strip_dy(w, b, 1u), b.base);
+        w = strip_walk_next(w);
+        fresh = w.oh == 0u;
     }
     if (!b.live) { return; }
-    put_stage_dw3(b, lo, 0u);
-    put_stage_dw3(b, hi, 4u);
+    put_stage_dw9(b, lo, 0u);
+    put_stage_dw9(b, hi, 4u);
 }

@@ -97,10 +97,10 @@ fn weight_chunks(gpu: &Gpu, rows: usize, per_chunk: usize, gpu_tiles: usize) -> 
     (chunk, rows.div_ceil(chunk))
 }
 
-/// Whether `g` has the shape of `conv_direct_backward_weight_w3`: 3 W taps at column stride 1,
-/// at most 8 output channels (the narrow heads).
+/// Whether `g` has the shape of `conv_direct_backward_weight_w3`: 3 x 3 taps along H and W at
+/// stride 1 there, at most 8 output channels (the narrow heads).
 fn w3_shape(g: &Geometry) -> bool {
-    g.kernel[2] == 3 && g.stride[2] == 1 && g.co <= 8
+    g.kernel[1..] == [3, 3] && g.stride[1..] == [1, 1] && g.co <= 8
 }
 
 /// Whether the weight gradient of `g` (not folded) reads x in place in its stage
@@ -122,11 +122,14 @@ fn backward_weight_direct(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geome
     // column of taps; 5 x 5 taps (the first layer): `_k5` tiles take them all, sharing each dy fetch.
     let k5 = g.kernel[1] == 5 && g.kernel[2] == 5;
     let (entry, cols) = match (w3, k5) {
-        (true, _) => (if g.co <= 4 { "conv_direct_backward_weight_w3" } else { "conv_direct_backward_weight_w3x8" }, (g.kernel[0] * g.kernel[1] * g.ci).div_ceil(8)),
+        (true, _) => (if g.co <= 4 { "conv_direct_backward_weight_w3" } else { "conv_direct_backward_weight_w3x8" }, (g.kernel[0] * g.ci).div_ceil(8)),
         (false, true) => ("conv_direct_backward_weight_k5", g.kernel[0] * g.ci * g.co.div_ceil(8)),
         (false, false) => ("conv_direct_backward_weight", g.kernel[0] * g.ci * g.kernel[1] * g.kernel[2].div_ceil(4) * g.co.div_ceil(8)),
     };
-    let (chunk, nchunks) = weight_chunks(gpu, g.n * g.output[0] * g.output[1], cols, 256);
+    // `_w3` walks strips of 8 columns down their rows, `lead` columns early (see the shader).
+    let lead = (4 - g.pad[2] % 4) % 4;
+    let rows = g.n * g.output[0] * if w3 { (g.output[2] + lead).div_ceil(8) * g.output[1] } else { g.output[1] };
+    let (chunk, nchunks) = weight_chunks(gpu, rows, cols, 256);
     let part = gpu.scratch(&[nchunks, volume(g.kernel), cpad, g.co.div_ceil(16) * 16])?;
     let tiles = nchunks * cols;
     let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, total: tiles as u32, ..p };
