@@ -176,28 +176,30 @@ fn conv_direct_backward_weight_k5(ids: LaneIds) {
 }
 
 
-// ---- weight gradient, 3 x 3 taps a lane on the stage (kh = kw = 3, sh = sw = 1, <= 8 outputs) --
-// The narrow heads' (16 -> 3 or 5, 3x3) weight gradient without packing x: a lane owns a depth
-// tap kd and one input channel c (pair kd * ci + c) with its 3 x 3 (H, W) taps, for 4 output
-// channels (`_w3`) or 8 (`_w3x8`), and walks strips of 8 output columns down their rows. A step
-// (a row of a strip) reads 3 input rows, 2 of which the step before read: it fetches one row's 3
-// stage texels (12 W voxels: the strip starts `lead` columns early so that they are whole
-// texels), keeps the other two from the step before, and multiplies them by the 8 positions'
-// dy, which comes as in the tiles of conv_tex_weight.wgsl (a texel a lane, handed around by
-// shuffles): 3 texel fetches for 288 multiply-adds. The channel-quad tiles there need x packed,
-// a texture store per texel (~13x a fetch on lavapipe, `rendernet bench --operands`), where
-// src/ops/conv_pack.rs copies x into the stage with no dispatch when its rows are whole staging
-// rows. Writes part like the tiles. Params: the conv's geometry; cpad = ceil(ci / 4) * 4;
-// nchunks, chunk (strip rows per chunk: n * od * strips * oh in all), total = tiles.
+// ---- weight gradient, three W taps a lane on the stage (3 x 3 taps at stride 1, <= 8 outputs) --
+// The narrow heads' (16 -> 3 or 5, 3x3) weight gradient without packing x: a lane owns a tap row
+// r = (kd, kh) and one input channel c (pair r * ci + c) with its 3 W taps, for 4 output
+// channels (`_w3`) or 8 (`_w3x8`), and walks strips of 16 output columns down their rows. A
+// step (a row of a strip) fetches the 5 stage texels (20 W voxels: the strip starts `lead`
+// columns early so that they are whole texels) that hold the 18 its 16 positions x 3 taps read,
+// and multiplies them by the positions' dy, which comes as in the tiles of conv_tex_weight.wgsl
+// (a texel a lane, handed around by shuffles). Each accumulator takes 16 multiply-adds a step:
+// on lavapipe a loop-carried value costs several FMAs of its own an iteration (README "One loop
+// per tile"). The channel-quad tiles there need x packed, a texture store per texel (~13x a
+// fetch on lavapipe, `rendernet bench --operands`), where src/ops/conv_pack.rs copies x into
+// the stage with no dispatch when its rows are whole staging rows. Writes part like the tiles
+// (a row's three taps are consecutive rows of it). Params: the conv's geometry; cpad =
+// ceil(ci / 4) * 4; nchunks, chunk (strip rows per chunk: n * od * strips * oh in all), total =
+// tiles.
 
 // Columns a strip starts before its first output column: pw + lead is a multiple of 4.
 fn stage_lead() -> u32 {
     return (4u - p.pw % 4u) % 4u;
 }
 
-// Strips of 8 output columns a row (the first `lead` columns early).
+// Strips of 16 output columns a row (the first `lead` columns early).
 fn stage_strips() -> u32 {
-    return (p.ow + stage_lead() + 7u) / 8u;
+    return (p.ow + stage_lead() + 15u) / 16u;
 }
 
 // A step: output row oh of strip s at depth od of item n.
@@ -218,92 +220,71 @@ fn strip_walk_next(w: StripWalk) -> StripWalk {
     return StripWalk(w.n + u32(wd), select(od, 0u, wd), select(s, 0u, ws), select(oh, 0u, wh));
 }
 
-// The lane's pair (BwLane's q: the channel, tap: its first tap (kd, 0, 0)) and its chunk's
-// strip rows.
+// The lane's pair (BwLane's q: the channel; tap: its row's first tap (kd, kh, 0)) and its
+// chunk's strip rows.
 fn stage_lane(tl: vec3<u32>) -> BwLane {
-    let pairs = p.kd * p.ci;
-    let groups = (pairs + 7u) / 8u;
+    let rows = p.kd * p.kh;
+    let groups = (rows * p.ci + 7u) / 8u;
     let pair = (tl.x % groups) * 8u + tl.y;
     let chunk = tl.x / groups;
-    let bp = BwPair(chunk, 0u, pair, min(pair / p.ci, p.kd - 1u) * 9u, pair % p.ci);
+    let bp = BwPair(chunk, 0u, pair, min(pair / p.ci, rows - 1u) * 3u, pair % p.ci);
     let begin = chunk * p.chunk;
     let span = vec2<u32>(begin, min(begin + p.chunk, p.n * p.od * stage_strips() * p.oh));
-    return BwLane(bp, pair < pairs, tap_axes(bp.tap), span, tl.y, tl.z);
+    return BwLane(bp, pair < rows * p.ci, tap_axes(bp.tap), span, tl.y, tl.z);
 }
 
-// W voxels 8 s - lead - pw .. + 11 of input row zh at depth zd of the lane's channel (s0.x
-// first): 3 whole texels.
-struct Xs12 { s0: vec4<f32>, s1: vec4<f32>, s2: vec4<f32> }
+// W voxels 16 s - lead - pw .. + 19 of the lane's input row at the step (s0.x first): 5 whole
+// texels.
+struct Xs20 { s0: vec4<f32>, s1: vec4<f32>, s2: vec4<f32>, s3: vec4<f32>, s4: vec4<f32> }
 
-fn stage_xs12(w: StripWalk, b: BwLane, zd: i32, zh: i32) -> Xs12 {
+fn stage_xs20(w: StripWalk, b: BwLane) -> Xs20 {
+    let zd = i32(w.od * p.sd + b.k.x) - i32(p.pd);
+    let zh = i32(w.oh + b.k.y) - i32(p.ph);
     let r = stage_row(w.n, b.bp.q, zd, zh);
-    let j = i32(2u * w.s) - i32((stage_lead() + p.pw) / 4u);
-    return Xs12(stage_row_texel(r, j), stage_row_texel(r, j + 1), stage_row_texel(r, j + 2));
+    let j = i32(4u * w.s) - i32((stage_lead() + p.pw) / 4u);
+    return Xs20(stage_row_texel(r, j), stage_row_texel(r, j + 1), stage_row_texel(r, j + 2), stage_row_texel(r, j + 3), stage_row_texel(r, j + 4));
 }
 
-// The lane's dy texel of quad `quad` for the step: column 8 s - lead + lane (wrapping below 0:
-// dy_texel reads zero there).
-fn strip_dy(w: StripWalk, b: BwLane, quad: u32) -> vec4<f32> {
-    return dy_texel(Walk(w.n, w.od, w.oh, 8u * w.s), b.lane - stage_lead(), quad);
+// The lane's dy texel of quad `quad` for the step's half `half` (8 columns): column 16 s + 8
+// half - lead + lane (wrapping below 0: dy_texel reads zero there).
+fn strip_dy(w: StripWalk, b: BwLane, half: u32, quad: u32) -> vec4<f32> {
+    return dy_texel(Walk(w.n, w.od, w.oh, 16u * w.s + 8u * half), b.lane - stage_lead(), quad);
 }
 
-// The three W taps' accumulators of 4 output channels, and a lane's 3 x 3.
+// The three W taps' accumulators of 4 output channels.
 struct Acc3 { t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32> }
-struct Acc9 { h0: Acc3, h1: Acc3, h2: Acc3 }
 
 // Position j of the step: taps 0, 1, 2 read x0, x1, x2; d its dy.
 fn mac3(a: Acc3, x0: f32, x1: f32, x2: f32, d: vec4<f32>) -> Acc3 {
     return Acc3(a.t0 + x0 * d, a.t1 + x1 * d, a.t2 + x2 * d);
 }
 
-// A step's 8 positions on one input row x and the dy texels the lanes fetched (g, shuffled from
+// 8 positions on the 12 voxels from v0.x and the dy texels the lanes fetched (g, shuffled from
 // lane base + j for position j).
-fn mac3_step(a: Acc3, x: Xs12, g: vec4<f32>, base: u32) -> Acc3 {
-    var r = mac3(a, x.s0.x, x.s0.y, x.s0.z, subgroupShuffle(g, base));
-    r = mac3(r, x.s0.y, x.s0.z, x.s0.w, subgroupShuffle(g, base + 1u));
-    r = mac3(r, x.s0.z, x.s0.w, x.s1.x, subgroupShuffle(g, base + 2u));
-    r = mac3(r, x.s0.w, x.s1.x, x.s1.y, subgroupShuffle(g, base + 3u));
-    r = mac3(r, x.s1.x, x.s1.y, x.s1.z, subgroupShuffle(g, base + 4u));
-    r = mac3(r, x.s1.y, x.s1.z, x.s1.w, subgroupShuffle(g, base + 5u));
-    r = mac3(r, x.s1.z, x.s1.w, x.s2.x, subgroupShuffle(g, base + 6u));
-    return mac3(r, x.s1.w, x.s2.x, x.s2.y, subgroupShuffle(g, base + 7u));
+fn mac3_8(a: Acc3, v0: vec4<f32>, v1: vec4<f32>, v2: vec4<f32>, g: vec4<f32>, base: u32) -> Acc3 {
+    var r = mac3(a, v0.x, v0.y, v0.z, subgroupShuffle(g, base));
+    r = mac3(r, v0.y, v0.z, v0.w, subgroupShuffle(g, base + 1u));
+    r = mac3(r, v0.z, v0.w, v1.x, subgroupShuffle(g, base + 2u));
+    r = mac3(r, v0.w, v1.x, v1.y, subgroupShuffle(g, base + 3u));
+    r = mac3(r, v1.x, v1.y, v1.z, subgroupShuffle(g, base + 4u));
+    r = mac3(r, v1.y, v1.z, v1.w, subgroupShuffle(g, base + 5u));
+    r = mac3(r, v1.z, v1.w, v2.x, subgroupShuffle(g, base + 6u));
+    return mac3(r, v1.w, v2.x, v2.y, subgroupShuffle(g, base + 7u));
 }
 
-// The step's 3 input rows (tap rows kh = 0, 1, 2) with one dy texel.
-fn mac9_step(a: Acc9, x0: Xs12, x1: Xs12, x2: Xs12, g: vec4<f32>, base: u32) -> Acc9 {
-    return Acc9(mac3_step(a.h0, x0, g, base), mac3_step(a.h1, x1, g, base), mac3_step(a.h2, x2, g, base));
+// The step's 16 positions: the first 8 on dy texels g0, the next on g1.
+fn mac3_16(a: Acc3, x: Xs20, g0: vec4<f32>, g1: vec4<f32>, base: u32) -> Acc3 {
+    return mac3_8(mac3_8(a, x.s0, x.s1, x.s2, g0, base), x.s2, x.s3, x.s4, g1, base);
 }
 
-// The input rows of a step: rows oh - ph + 0, 1, 2 at the lane's depth tap.
-struct Rows3 { x0: Xs12, x1: Xs12, x2: Xs12 }
-
-// The step's rows: the last two of the step before (`prev`) unless the strip starts here
-// (`fresh`), and the third fetched. A branch the tile's lanes all take or all skip.
-fn strip_rows(w: StripWalk, b: BwLane, prev: Rows3, fresh: bool) -> Rows3 {
-    let zd = i32(w.od * p.sd + b.k.x) - i32(p.pd);
-    let zh = i32(w.oh) - i32(p.ph);
-    var r = Rows3(prev.x1, prev.x2, stage_xs12(w, b, zd, zh + 2));
-    if (fresh) {
-        r.x0 = stage_xs12(w, b, zd, zh);
-        r.x1 = stage_xs12(w, b, zd, zh + 1);
-    }
-    return r;
-}
-
-// dw of the lane's channel at taps (kd, kh, 0..2), output channels col..col + 3.
-fn put_stage_dw3(b: BwLane, kh: u32, a: Acc3, col: u32) {
+// dw of the lane's channel at its row's three taps, output channels col..col + 3.
+fn put_stage_dw3(b: BwLane, a: Acc3, col: u32) {
     let copad = p.co16 * 16u;
-    let o = ((b.bp.chunk * p.kd * 9u + b.bp.tap + 3u * kh) * p.cpad + b.bp.q) * copad + col;
+    let o = ((b.bp.chunk * p.kd * p.kh * p.kw + b.bp.tap) * p.cpad + b.bp.q) * copad + col;
     let next = p.cpad * copad;
     put_dw(o, 0u, 1u, a.t0);
     put_dw(o + next, 0u, 1u, a.t1);
     put_dw(o + 2u * next, 0u, 1u, a.t2);
-}
-
-fn put_stage_dw9(b: BwLane, a: Acc9, col: u32) {
-    put_stage_dw3(b, 0u, a.h0, col);
-    put_stage_dw3(b, 1u, a.h1, col);
-    put_stage_dw3(b, 2u, a.h2, col);
 }
 
 @compute @workgroup_size(64)
@@ -311,18 +292,14 @@ fn conv_direct_backward_weight_w3(ids: LaneIds) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
     let b = stage_lane(tl);
-    var a: Acc9;
-    var x: Rows3;
+    var a: Acc3;
     var w = strip_walk_from(b.span.x);
-    var fresh = true;
     for (var i = b.span.x; i < b.span.y; i++) {
-        x = strip_rows(w, b, x, fresh);
-        a = mac9_step(a, x.x0, x.x1, x.x2, strip_dy(w, b, 0u), b.base);
+        a = mac3_16(a, stage_xs20(w, b), strip_dy(w, b, 0u, 0u), strip_dy(w, b, 1u, 0u), b.base);
         w = strip_walk_next(w);
-        fresh = w.oh == 0u;
     }
     if (!b.live) { return; }
-    put_stage_dw9(b, a, 0u);
+    put_stage_dw3(b, a, 0u);
 }
 
 @compute @workgroup_size(64)
@@ -330,19 +307,16 @@ fn conv_direct_backward_weight_w3x8(ids: LaneIds) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
     let b = stage_lane(tl);
-    var lo: Acc9;
-    var hi: Acc9;
-    var x: Rows3;
+    var lo: Acc3;
+    var hi: Acc3;
     var w = strip_walk_from(b.span.x);
-    var fresh = true;
     for (var i = b.span.x; i < b.span.y; i++) {
-        x = strip_rows(w, b, x, fresh);
-        lo = mac9_step(lo, x.x0, x.x1, x.x2, strip_dy(w, b, 0u), b.base);
-        hi = mac9_step(hi, x.x0, x.x1, x.x2, strip_dy(w, b, 1u), b.base);
+        let x = stage_xs20(w, b);
+        lo = mac3_16(lo, x, strip_dy(w, b, 0u, 0u), strip_dy(w, b, 1u, 0u), b.base);
+        hi = mac3_16(hi, x, strip_dy(w, b, 0u, 1u), strip_dy(w, b, 1u, 1u), b.base);
         w = strip_walk_next(w);
-        fresh = w.oh == 0u;
     }
     if (!b.live) { return; }
-    put_stage_dw9(b, lo, 0u);
-    put_stage_dw9(b, hi, 4u);
+    put_stage_dw3(b, lo, 0u);
+    put_stage_dw3(b, hi, 4u);
 }

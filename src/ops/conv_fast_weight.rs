@@ -122,13 +122,13 @@ fn backward_weight_direct(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geome
     // column of taps; 5 x 5 taps (the first layer): `_k5` tiles take them all, sharing each dy fetch.
     let k5 = g.kernel[1] == 5 && g.kernel[2] == 5;
     let (entry, cols) = match (w3, k5) {
-        (true, _) => (if g.co <= 4 { "conv_direct_backward_weight_w3" } else { "conv_direct_backward_weight_w3x8" }, (g.kernel[0] * g.ci).div_ceil(8)),
+        (true, _) => (if g.co <= 4 { "conv_direct_backward_weight_w3" } else { "conv_direct_backward_weight_w3x8" }, (g.kernel[0] * g.kernel[1] * g.ci).div_ceil(8)),
         (false, true) => ("conv_direct_backward_weight_k5", g.kernel[0] * g.ci * g.co.div_ceil(8)),
         (false, false) => ("conv_direct_backward_weight", g.kernel[0] * g.ci * g.kernel[1] * g.kernel[2].div_ceil(4) * g.co.div_ceil(8)),
     };
-    // `_w3` walks strips of 8 columns down their rows, `lead` columns early (see the shader).
+    // `_w3` walks strips of 16 columns down their rows, `lead` columns early (see the shader).
     let lead = (4 - g.pad[2] % 4) % 4;
-    let rows = g.n * g.output[0] * if w3 { (g.output[2] + lead).div_ceil(8) * g.output[1] } else { g.output[1] };
+    let rows = g.n * g.output[0] * if w3 { (g.output[2] + lead).div_ceil(16) * g.output[1] } else { g.output[1] };
     let (chunk, nchunks) = weight_chunks(gpu, rows, cols, 256);
     let part = gpu.scratch(&[nchunks, volume(g.kernel), cpad, g.co.div_ceil(16) * 16])?;
     let tiles = nchunks * cols;
