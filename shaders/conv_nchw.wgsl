@@ -40,8 +40,20 @@ fn conv_nchw_pack_weights(@builtin(global_invocation_id) gid: vec3<u32>) {
 @group(0) @binding(3) var<storage, read> bias: array<f32>;
 @group(0) @binding(4) var<storage, read_write> y4: array<vec4<f32>>;
 
+// Or, where src/ops/conv_nchw.rs says so (`_stage`), the same values as the direct kernels'
+// stage texture (conv_direct.wgsl): texel (t, row, n * ci + c) = x4[plane + row * w4 + t], x's
+// own memory copied in with no dispatch. A storage-buffer load costs lavapipe 22.3 a loop over
+// the lanes, a storage-texture load a gather: 157 against 18 ceiling FMAs per vec4 on an AMD
+// Zen 4 (`rendernet bench --operands`), and each lane loads 30 a channel.
+@group(0) @binding(5) var xs: texture_storage_3d<rgba32float, read>;
+
 // One input row's values under the lane's 4 outputs at W taps -1, 0 and +1.
 struct Taps { a: vec4<f32>, b: vec4<f32>, c: vec4<f32> }
+
+// One row's taps from its vec4 column m and the neighbours l, r (already zero off the image).
+fn taps_of(l: vec4<f32>, m: vec4<f32>, r: vec4<f32>) -> Taps {
+    return Taps(vec4<f32>(l.w, m.x, m.y, m.z), m, vec4<f32>(m.y, m.z, m.w, r.x));
+}
 
 // Input row `row` (zero outside the image) of the channel plane at vec4 `plane`, column t.
 fn taps(plane: u32, row: i32, t: u32) -> Taps {
@@ -50,7 +62,31 @@ fn taps(plane: u32, row: i32, t: u32) -> Taps {
     let m = select(vec4<f32>(0.0), x4[at + t], inside);
     let l = select(vec4<f32>(0.0), x4[at + max(t, 1u) - 1u], inside && t > 0u);
     let r = select(vec4<f32>(0.0), x4[at + min(t + 1u, q.w4 - 1u)], inside && t + 1u < q.w4);
-    return Taps(vec4<f32>(l.w, m.x, m.y, m.z), m, vec4<f32>(m.y, m.z, m.w, r.x));
+    return taps_of(l, m, r);
+}
+
+// The same from the stage texture, the plane at layer `layer`.
+fn taps_stage(layer: u32, row: i32, t: u32) -> Taps {
+    let inside = row >= 0 && row < i32(q.h);
+    let y = u32(clamp(row, 0, i32(q.h) - 1));
+    let m = select(vec4<f32>(0.0), textureLoad(xs, vec3<u32>(t, y, layer)), inside);
+    let l = select(vec4<f32>(0.0), textureLoad(xs, vec3<u32>(max(t, 1u) - 1u, y, layer)), inside && t > 0u);
+    let r = select(vec4<f32>(0.0), textureLoad(xs, vec3<u32>(min(t + 1u, q.w4 - 1u), y, layer)), inside && t + 1u < q.w4);
+    return taps_of(l, m, r);
+}
+
+// The 10 input rows r0 - 1 .. r0 + 8 a lane's 8 output rows read.
+struct Rows10 { x0: Taps, x1: Taps, x2: Taps, x3: Taps, x4: Taps, x5: Taps, x6: Taps, x7: Taps, x8: Taps, x9: Taps }
+
+fn rows10(plane: u32, r0: i32, t: u32) -> Rows10 {
+    return Rows10(taps(plane, r0 - 1, t), taps(plane, r0, t), taps(plane, r0 + 1, t), taps(plane, r0 + 2, t), taps(plane, r0 + 3, t),
+                  taps(plane, r0 + 4, t), taps(plane, r0 + 5, t), taps(plane, r0 + 6, t), taps(plane, r0 + 7, t), taps(plane, r0 + 8, t));
+}
+
+fn rows10_stage(layer: u32, r0: i32, t: u32) -> Rows10 {
+    return Rows10(taps_stage(layer, r0 - 1, t), taps_stage(layer, r0, t), taps_stage(layer, r0 + 1, t), taps_stage(layer, r0 + 2, t),
+                  taps_stage(layer, r0 + 3, t), taps_stage(layer, r0 + 4, t), taps_stage(layer, r0 + 5, t), taps_stage(layer, r0 + 6, t),
+                  taps_stage(layer, r0 + 7, t), taps_stage(layer, r0 + 8, t));
 }
 
 // One output row's 4 W positions, per output channel.
@@ -91,51 +127,68 @@ fn put(n: u32, row: u32, t: u32, o: Out) {
     if (q.og + 3u < q.co) { y4[at + 3u * plane] = o.o3; }
 }
 
+// A lane: vec4 column t, first row r0 of its block of 8, item n (live: within the grid).
+struct Lane { t: u32, r0: i32, n: u32, live: bool }
+
 // One invocation per vec4 column, block of 8 rows and item, over a grid_1d grid (2D past
 // 65535 workgroups).
+fn lane_of(gid: vec3<u32>, nwg: vec3<u32>) -> Lane {
+    let i = gid.x + gid.y * nwg.x * 64u;
+    let rest = i / q.w4;
+    return Lane(i % q.w4, i32((rest % q.hb) * 8u), rest / q.hb, i < q.total);
+}
+
+// The lane's 8 output rows.
+struct Acc8r { a0: Out, a1: Out, a2: Out, a3: Out, a4: Out, a5: Out, a6: Out, a7: Out }
+
+fn acc_init() -> Acc8r {
+    let b = vec4<f32>(0.0);
+    let i = Out(b + bias_or_zero(0u), b + bias_or_zero(1u), b + bias_or_zero(2u), b + bias_or_zero(3u));
+    return Acc8r(i, i, i, i, i, i, i, i);
+}
+
+// Input channel c's contribution from its 10 rows x.
+fn mac_channel(a: Acc8r, c: u32, x: Rows10) -> Acc8r {
+    let k0 = krow(c, 0u);
+    let k1 = krow(c, 1u);
+    let k2 = krow(c, 2u);
+    return Acc8r(mac3(a.a0, x.x0, x.x1, x.x2, k0, k1, k2), mac3(a.a1, x.x1, x.x2, x.x3, k0, k1, k2),
+                 mac3(a.a2, x.x2, x.x3, x.x4, k0, k1, k2), mac3(a.a3, x.x3, x.x4, x.x5, k0, k1, k2),
+                 mac3(a.a4, x.x4, x.x5, x.x6, k0, k1, k2), mac3(a.a5, x.x5, x.x6, x.x7, k0, k1, k2),
+                 mac3(a.a6, x.x6, x.x7, x.x8, k0, k1, k2), mac3(a.a7, x.x7, x.x8, x.x9, k0, k1, k2));
+}
+
+fn put_acc(l: Lane, a: Acc8r) {
+    let r = u32(l.r0);
+    put(l.n, r, l.t, a.a0);
+    put(l.n, r + 1u, l.t, a.a1);
+    put(l.n, r + 2u, l.t, a.a2);
+    put(l.n, r + 3u, l.t, a.a3);
+    put(l.n, r + 4u, l.t, a.a4);
+    put(l.n, r + 5u, l.t, a.a5);
+    put(l.n, r + 6u, l.t, a.a6);
+    put(l.n, r + 7u, l.t, a.a7);
+}
+
 @compute @workgroup_size(64)
 fn conv_nchw_forward3x3(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let i = gid.x + gid.y * nwg.x * 64u;
-    if (i >= q.total) { return; }
-    let t = i % q.w4;
-    let rest = i / q.w4;
-    let r0 = i32((rest % q.hb) * 8u);
-    let n = rest / q.hb;
-    let b = vec4<f32>(0.0);
-    let init = Out(b + bias_or_zero(0u), b + bias_or_zero(1u), b + bias_or_zero(2u), b + bias_or_zero(3u));
-    var a0 = init; var a1 = init; var a2 = init; var a3 = init;
-    var a4 = init; var a5 = init; var a6 = init; var a7 = init;
+    let l = lane_of(gid, nwg);
+    if (!l.live) { return; }
+    var a = acc_init();
     for (var c = 0u; c < q.ci; c++) {
-        let plane = (n * q.ci + c) * q.h * q.w4;
-        let k0 = krow(c, 0u);
-        let k1 = krow(c, 1u);
-        let k2 = krow(c, 2u);
-        let x0 = taps(plane, r0 - 1, t);
-        let x1 = taps(plane, r0, t);
-        let x2 = taps(plane, r0 + 1, t);
-        let x3 = taps(plane, r0 + 2, t);
-        let x4_ = taps(plane, r0 + 3, t);
-        let x5 = taps(plane, r0 + 4, t);
-        let x6 = taps(plane, r0 + 5, t);
-        let x7 = taps(plane, r0 + 6, t);
-        let x8 = taps(plane, r0 + 7, t);
-        let x9 = taps(plane, r0 + 8, t);
-        a0 = mac3(a0, x0, x1, x2, k0, k1, k2);
-        a1 = mac3(a1, x1, x2, x3, k0, k1, k2);
-        a2 = mac3(a2, x2, x3, x4_, k0, k1, k2);
-        a3 = mac3(a3, x3, x4_, x5, k0, k1, k2);
-        a4 = mac3(a4, x4_, x5, x6, k0, k1, k2);
-        a5 = mac3(a5, x5, x6, x7, k0, k1, k2);
-        a6 = mac3(a6, x6, x7, x8, k0, k1, k2);
-        a7 = mac3(a7, x7, x8, x9, k0, k1, k2);
+        a = mac_channel(a, c, rows10((l.n * q.ci + c) * q.h * q.w4, l.r0, l.t));
     }
-    let r = u32(r0);
-    put(n, r, t, a0);
-    put(n, r + 1u, t, a1);
-    put(n, r + 2u, t, a2);
-    put(n, r + 3u, t, a3);
-    put(n, r + 4u, t, a4);
-    put(n, r + 5u, t, a5);
-    put(n, r + 6u, t, a6);
-    put(n, r + 7u, t, a7);
+    put_acc(l, a);
+}
+
+// The same on x in its stage texture.
+@compute @workgroup_size(64)
+fn conv_nchw_forward3x3_stage(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let l = lane_of(gid, nwg);
+    if (!l.live) { return; }
+    var a = acc_init();
+    for (var c = 0u; c < q.ci; c++) {
+        a = mac_channel(a, c, rows10_stage(l.n * q.ci + c, l.r0, l.t));
+    }
+    put_acc(l, a);
 }

@@ -198,6 +198,29 @@ fn unpacked_heads_forward() {
     check(&Case { ci: 2, co: 7, input: [1, 5, 8], kernel: ConvKernel::Nchw, ..transposed2d([3, 3], [1, 1], Padding::Same, None) }, 126);
 }
 
+/// The unpacked heads' forward on x copied into the direct kernels' stage texture
+/// (`conv_nchw_forward3x3_stage`: rows of whole staging rows, width 64): 16 -> 3 over 9 rows
+/// (a part-filled block of 8), 5 -> 8 (two groups of 4, a part-filled input quad) over 10, batch
+/// 2 with a bias, against the f64 reference and finite differences. Then, on a second adapter
+/// settled to store its packings, the 16 -> 3 forward splits its pass once on a CPU adapter (x
+/// copied in; the buffer kernel reads x where it lies) and never elsewhere.
+#[test]
+fn unpacked_heads_forward_reads_x_in_its_stage() {
+    let head = Case { ci: 16, co: 3, input: [1, 9, 64], kernel: ConvKernel::Nchw, ..conv2d([3, 3], [1, 1], Padding::Same) };
+    check(&head, 150);
+    check(&Case { ci: 5, co: 8, input: [1, 10, 64], ..head }, 151);
+    let stores = rendernet::Gpu::new().expect("a second adapter");
+    assert!(stores.settle_pack_copies(false));
+    let Op::Conv(op) = head.op else { unreachable!() };
+    let g = geom(&head);
+    let (xs, ws, ys) = (shape(true, head.n, head.ci, g.input), w_shape(&head), shape(true, head.n, head.co, g.output));
+    let (tx, tw, ty) = (Tensor::zeros(&stores, &xs).unwrap(), Tensor::zeros(&stores, &ws).unwrap(), Tensor::zeros(&stores, &ys).unwrap());
+    let before = stores.pass_splits();
+    stores.run(|p| op.forward(head.kernel, &stores, p, &tx, &tw, None, &ty)).unwrap();
+    let cpu = stores.info.device_type == wgpu::DeviceType::Cpu;
+    assert_eq!(stores.pass_splits() - before, u64::from(cpu), "splits of the head's forward");
+}
+
 /// Widths that are multiples of 4 (12 and 8, not powers of two), where the texture family
 /// packs its unfolded operands four voxels along W per load (`conv_fast_pack_tex_w4`): the
 /// forward's x and the backward passes' dy (12 wide at stride 1; 4 wide after stride 3), with

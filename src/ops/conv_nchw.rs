@@ -9,6 +9,8 @@
 //! forces it.
 
 use super::conv::Geometry;
+use super::conv_fast::{self, x_texture_fits};
+use super::conv_pack::{stage_copies, stage_x};
 use crate::error::Result;
 use crate::gpu::{Arg, Gpu, Packing, Shader, Tensor, grid_1d, wgsl};
 
@@ -79,15 +81,29 @@ fn packed_weights(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: NchwParams, w:
     Ok(t)
 }
 
-/// Records `y = conv(x, w) + b` for a `g` that [`fits`].
+/// Records `y = conv(x, w) + b` for a `g` that [`fits`]: reading x from the direct kernels'
+/// stage texture (`conv_nchw_forward3x3_stage`) where `stage_x` copies it in with no dispatch
+/// (`stage_copies`), else from its buffer.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn forward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor, w: &Tensor, b: Option<&Tensor>, y: &Tensor) -> Result<()> {
     debug_assert!(fits(g));
+    let stage = if stage_copies(gpu, pass, g, x) && x_texture_fits(gpu, g.n, 4 * g.ci, g.input) {
+        Some(stage_x(gpu, pass, g, x, &conv_fast::params(g, g.ci.div_ceil(4) * 4))?)
+    } else {
+        None
+    };
     for og in (0..g.co).step_by(4) {
         let p = NchwParams { og: og as u32, ..params(g, b.is_some()) };
         let wk = packed_weights(gpu, pass, p, w)?;
-        let args = [Arg::R(x), Arg::U(&wk), b.map_or(Arg::Absent, Arg::R), Arg::W(y)];
-        gpu.dispatch(pass, SHADER, "conv_nchw_forward3x3", &p, &args, grid_1d(p.total as u64, 64)?)?;
+        let mut args = vec![Arg::R(x), Arg::U(&wk), b.map_or(Arg::Absent, Arg::R), Arg::W(y)];
+        let entry = match &stage {
+            Some(v) => {
+                args.push(Arg::ReadStorageTexture(v, wgpu::TextureViewDimension::D3));
+                "conv_nchw_forward3x3_stage"
+            }
+            None => "conv_nchw_forward3x3",
+        };
+        gpu.dispatch(pass, SHADER, entry, &p, &args, grid_1d(p.total as u64, 64)?)?;
     }
     Ok(())
 }
@@ -100,7 +116,8 @@ pub(crate) fn wins(gpu: &Gpu) -> bool {
     *gpu.conv_nchw.get_or_init(|| match std::env::var("RENDERNET_CONV_HEADS").as_deref() {
         Ok("nchw") => true,
         Ok("packed") => false,
-        _ => gpu.calibrated_choice("conv-nchw-heads", || measure(gpu).unwrap_or(false)),
+        // v2: the kernel reads x from its stage where that is copied in.
+        _ => gpu.calibrated_choice("conv-nchw-heads-v2", || measure(gpu).unwrap_or(false)),
     })
 }
 
