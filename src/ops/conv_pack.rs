@@ -139,7 +139,7 @@ pub(super) fn write_texels(
 pub(super) fn stage_copies(gpu: &Gpu, pass: &wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor) -> bool {
     let iw = g.input[2];
     let cpu = gpu.info.device_type == wgpu::DeviceType::Cpu;
-    iw % 4 == 0 && staging_pitch(iw / 4) == iw / 4 && x.offset().is_multiple_of(16) && cpu && gpu.can_split(pass)
+    iw.is_multiple_of(4) && staging_pitch(iw / 4) == iw / 4 && x.offset().is_multiple_of(16) && cpu && gpu.can_split(pass)
 }
 
 /// `x` ([N, C, input...] of `g`) copied into a 3D texture of 4 voxels along W a texel, which
