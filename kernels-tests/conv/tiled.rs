@@ -165,16 +165,23 @@ fn heads_weight_gradient_reads_x_in_its_stage() {
     check(&with(conv2d([3, 3], [1, 1], Padding::explicit_2d([1, 2], [0, 0])), 2, 16, 5, [1, 7, 64]), 141);
     check(&with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 1, 12, 8, [2, 3, 64]), 142);
     check(&with(conv2d([3, 3], [1, 1], Padding::explicit_2d([0, 0], [0, 0])), 2, 16, 2, [1, 4, 64]), 143);
+    let (splits, cpu) = splits_where_packings_store(&head, |op, gpu, p, x, dw, dy| op.backward_weight(head.kernel, gpu, p, x, dy, dw));
+    assert_eq!(splits, u64::from(cpu), "splits of the head's weight gradient");
+}
+
+/// The pass splits of one call of `f` (conv `c`'s op, the adapter, the pass, and zero tensors
+/// of `c`'s input, weight and output shapes) on a second adapter settled to store its packings,
+/// where only a copy into a texture splits a pass; and whether that adapter is a CPU.
+fn splits_where_packings_store(c: &Case, f: impl Fn(&Conv, &rendernet::Gpu, &mut wgpu::ComputePass<'_>, &Tensor, &Tensor, &Tensor) -> rendernet::Result<()>) -> (u64, bool) {
     let stores = rendernet::Gpu::new().expect("a second adapter");
     assert!(stores.settle_pack_copies(false));
-    let Op::Conv(op) = head.op else { unreachable!() };
-    let g = geom(&head);
-    let (xs, ws, ys) = (shape(true, head.n, head.ci, g.input), w_shape(&head), shape(true, head.n, head.co, g.output));
-    let (tx, tr, tdw) = (Tensor::zeros(&stores, &xs).unwrap(), Tensor::zeros(&stores, &ys).unwrap(), Tensor::zeros(&stores, &ws).unwrap());
+    let Op::Conv(op) = c.op else { panic!("{c:?} is not a conv") };
+    let g = geom(c);
+    let zeros = |s: &[usize]| Tensor::zeros(&stores, s).unwrap();
+    let (x, w, y) = (zeros(&shape(c.d2, c.n, c.ci, g.input)), zeros(&w_shape(c)), zeros(&shape(c.d2, c.n, c.co, g.output)));
     let before = stores.pass_splits();
-    stores.run(|p| op.backward_weight(head.kernel, &stores, p, &tx, &tr, &tdw)).unwrap();
-    let cpu = stores.info.device_type == wgpu::DeviceType::Cpu;
-    assert_eq!(stores.pass_splits() - before, u64::from(cpu), "splits of the head's weight gradient");
+    stores.run(|p| f(&op, &stores, p, &x, &w, &y)).unwrap();
+    (stores.pass_splits() - before, stores.info.device_type == wgpu::DeviceType::Cpu)
 }
 
 /// The narrow 3x3 heads' forward on the unpacked input (`conv_nchw_forward3x3`, forced by
@@ -209,16 +216,8 @@ fn unpacked_heads_forward_reads_x_in_its_stage() {
     let head = Case { ci: 16, co: 3, input: [1, 9, 64], kernel: ConvKernel::Nchw, ..conv2d([3, 3], [1, 1], Padding::Same) };
     check(&head, 150);
     check(&Case { ci: 5, co: 8, input: [1, 10, 64], ..head }, 151);
-    let stores = rendernet::Gpu::new().expect("a second adapter");
-    assert!(stores.settle_pack_copies(false));
-    let Op::Conv(op) = head.op else { unreachable!() };
-    let g = geom(&head);
-    let (xs, ws, ys) = (shape(true, head.n, head.ci, g.input), w_shape(&head), shape(true, head.n, head.co, g.output));
-    let (tx, tw, ty) = (Tensor::zeros(&stores, &xs).unwrap(), Tensor::zeros(&stores, &ws).unwrap(), Tensor::zeros(&stores, &ys).unwrap());
-    let before = stores.pass_splits();
-    stores.run(|p| op.forward(head.kernel, &stores, p, &tx, &tw, None, &ty)).unwrap();
-    let cpu = stores.info.device_type == wgpu::DeviceType::Cpu;
-    assert_eq!(stores.pass_splits() - before, u64::from(cpu), "splits of the head's forward");
+    let (splits, cpu) = splits_where_packings_store(&head, |op, gpu, p, x, w, y| op.forward(head.kernel, gpu, p, x, w, None, y));
+    assert_eq!(splits, u64::from(cpu), "splits of the head's forward");
 }
 
 /// Widths that are multiples of 4 (12 and 8, not powers of two), where the texture family
