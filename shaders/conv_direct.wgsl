@@ -7,11 +7,11 @@
 // it is, in the stage texture below: two texels per window row and chunk of 4 W taps, its own 4
 // values picked with vector selects. The forward multiplies them by 8 output channels' weights,
 // fetched one texel a lane and broadcast by subgroup shuffles, over the texture family's tiles (a
-// subgroup of 8 lanes = 8 outputs along W, 8 rows each) per group of 8 output channels; the weight
-// gradient multiplies them by the lane's own dy. Compiled appended to conv_fast.wgsl,
-// conv_tex.wgsl, conv_tex_pack.wgsl and conv_tex_weight.wgsl (their Params, bindings, bias4, put_raw, chunk_rows,
-// walk_from, walk_next, dy_quads, and the forward tiles' lane_tile, tile_taps, next_tap, Rows,
-// slide, Acc8, Tile8, tile8, mac_rows8, broadcast8, put_tile8, falpha).
+// subgroup of 8 lanes = 8 outputs along W, 8 rows each) per group of 8 output channels (their
+// weight gradients, which read the same stage: conv_direct_weight.wgsl). Compiled appended to
+// conv_fast.wgsl, conv_tex.wgsl, conv_tex_pack.wgsl and conv_tex_weight.wgsl (their Params,
+// bindings, bias4, put_raw, and the forward tiles' lane_tile, tile_taps, next_tap, Rows, slide,
+// Acc8, Tile8, tile8, mac_rows8, broadcast8, put_tile8, falpha).
 
 // ---- the stage: the input, 4 voxels along W a texel ----------------------------------------
 // Stage texel (j, h, (n * ci + c) * id + d) holds x[n, c, d, h, 4j..4j+3] (zero past iw): the

@@ -1,5 +1,6 @@
 // The narrow 3x3 heads' forward (2D, stride 1, padding 1, at most 8 output channels, W a
-// multiple of 4) on the input as it lies, NCHW, with no packing. src/ops/conv_nchw.rs binds it,
+// multiple of 4) on the input as it lies, NCHW, with no packing (or copied into a texture as it
+// lies: `_stage` below). src/ops/conv_nchw.rs binds it,
 // one dispatch per group of 4 output channels (og, og + 1, ...: the group's first is og).
 //
 // Why: the texture family first packs x into an rgba32f texture, and on lavapipe a

@@ -3,7 +3,7 @@
 // read through textures, dy shared across lanes by subgroup shuffles, partial sums per chunk of
 // output rows that conv_fast_weight_sum adds. Compiled appended to conv_fast.wgsl (Params,
 // chunk_rows, tap_axes, walk_from, walk_next) and conv_tex.wgsl (LaneIds, lane_tile);
-// conv_direct.wgsl's weight gradient uses this file's bdy, bpart and dy_quads.
+// conv_direct_weight.wgsl's weight gradients use this file's bdy, bpart, dy_quads and dy_texel.
 
 // ---- backward weight: lanes = 8 (tap, input channel quad) pairs; dy shared by shuffles ----
 // One subgroup of 8 lanes per (group of 8 pairs, output channel group of 16, chunk of output
@@ -18,7 +18,7 @@
 @group(0) @binding(2) var bdy: texture_storage_3d<rgba32float, read>;   // packed dy: dy_quads() quads per item
 @group(0) @binding(3) var<storage, read_write> bpart: array<f32>;
 
-// dy texels per voxel as src/ops/conv_fast.rs (dy_tex_channels) packs dy for the weight
+// dy texels per voxel as src/ops/conv_fast_weight.rs (dy_tex_channels) packs dy for the weight
 // gradients: one or two quads for at most 4 or 8 output channels, else co16 * 4.
 fn dy_quads() -> u32 {
     return select(p.co16 * 4u, (p.co + 3u) / 4u, p.co <= 8u);
@@ -232,7 +232,7 @@ fn conv_fast_backward_weight_tex8(ids: LaneIds) {
 // ---- backward weight, three W taps a lane (kw = 3, sw = 1, not folded) ----------------------
 // As the tiles above, but a lane owns a tap row r = (kd, kh) and channel quad q (pair r * cq +
 // q) with all three of its taps along W, for at most 4 output channels (`_tex4_w3`) or a group
-// of 8 (`_tex8_w3`; src/ops/conv_fast.rs says when). At column stride 1 those taps read overlapping x:
+// of 8 (`_tex8_w3`; src/ops/conv_fast_weight.rs says when). At column stride 1 those taps read overlapping x:
 // 10 texels serve a step's 8 positions x 3 taps, where the tiles above fetch a texel for every
 // (position, tap), and a texel fetch costs lavapipe tens of FMAs (`rendernet bench
 // --operands`). The part layout is unchanged (the three taps are consecutive rows).

@@ -601,6 +601,42 @@ fn a_training_run_packs_each_conv_input_once_for_forward_and_weight_gradient() {
     }
 }
 
+// A training run's narrow 3x3 head 64 wide (conv2d 16 -> 3 -> mse, a Phong head's shape): where
+// `Auto` runs its forward on the unpacked input (a CPU adapter where that measured faster), the
+// forward reads x from its stage texture, copied in, and keeps it, and the weight gradient
+// (`conv_direct_backward_weight_w3`) reads it there: one copy into a texture fewer than a run
+// that keeps nothing, with gradients and parameters equal to the bit. Elsewhere both runs copy
+// (or pack) alike.
+#[test]
+fn a_training_run_stages_a_heads_input_once() {
+    use rendernet::ops::conv::{Conv, ConvKernel, Padding};
+    let mut g = Graph::new();
+    let x = g.input("x", &[1, 16, 6, 64]).unwrap();
+    let w = g.param("h.weight", &[3, 16, 3, 3], Init::Xavier).unwrap();
+    let b = g.param("h.bias", &[3], Init::Constant(0.01)).unwrap();
+    let conv = Conv::conv2d([3, 3], [1, 1], Padding::Same);
+    let y = g.apply("h", Op::Conv(conv), &[x, w, b]).unwrap();
+    let target = g.input("target", &[1, 3, 6, 64]).unwrap();
+    let loss = g.apply("loss", Op::Loss(Loss::Mse), &[y, target]).unwrap();
+    let run = |keep: bool| {
+        let mut ex = Executor::new(gpu(), g.clone(), 3).unwrap();
+        ex.feed(gpu(), x, &f32v(&Rng(21).vec(16 * 6 * 64, -1.0, 1.0))).unwrap();
+        ex.feed(gpu(), target, &f32v(&Rng(22).vec(3 * 6 * 64, -1.0, 1.0))).unwrap();
+        ex.reuse_gpu_objects(keep);
+        ex.want_grad(x);
+        let before = gpu().pass_splits();
+        ex.train_step(gpu(), loss, &Adam::new(0.01)).unwrap();
+        let splits = gpu().pass_splits() - before;
+        let got = vec![ex.grad(gpu(), x).unwrap(), ex.grad(gpu(), w).unwrap(), ex.grad(gpu(), b).unwrap(), ex.read(gpu(), w).unwrap()];
+        (got, splits)
+    };
+    let ((kept, s_kept), (plain, s_plain)) = (run(true), run(false));
+    assert_eq!(kept, plain, "stage kept against none");
+    let cpu = gpu().info.device_type == wgpu::DeviceType::Cpu;
+    let unpacked = conv.forward_reads_staged_unpacked(ConvKernel::Auto, gpu(), &[1, 16, 6, 64], &[3, 16, 3, 3]).unwrap();
+    assert_eq!(s_plain - s_kept, u64::from(cpu && unpacked), "copies into textures: kept {s_kept}, plain {s_plain}");
+}
+
 // The resampling's pose gradient reads the grid and sampling map its forward packed (kept,
 // gpu/kept.rs) instead of staging and packing them again: grid [2, 4, 7, 8, 9] and pose
 // [2, 6] -> resample to 6 x 5 x 7 -> mse, the pose's (and the grid's) gradient asked for, as

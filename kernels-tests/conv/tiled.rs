@@ -150,8 +150,8 @@ fn texture_weight_gradients_of_three_w_taps_a_lane() {
 /// The narrow heads' weight gradient on x in place (`conv_direct_backward_weight_w3` and
 /// `_w3x8`: 3 W taps at column stride 1, at most 8 output channels, rows of whole staging rows
 /// so x is copied into its stage), against finite differences: 16 -> 3 (a quad of dy with one
-/// padding channel) with `Same` padding (the first texel's fourth voxel starts a step), 16 -> 5
-/// (two dy quads) at row stride 2 with 2 columns before and none after (its third), 12 -> 8 in 3D
+/// padding channel) with `Same` padding (strips start 3 columns early), 16 -> 5 (two dy quads)
+/// with 2 columns before and none after (2 early), 12 -> 8 in 3D
 /// (depth taps, channels not a multiple of 16) and 16 -> 2 unpadded (steps start on a texel),
 /// batch 2 where 2D. Then on a second adapter settled to store its packings (so only a copy
 /// splits the pass): the weight gradient of the first case splits its pass once on a CPU

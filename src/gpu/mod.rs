@@ -52,9 +52,10 @@ pub struct Gpu {
     /// Whether `ConvKernel::Auto` reads textures (decided once per device by
     /// `ops::conv_fast::calibrated`).
     pub(crate) conv_textures: std::sync::OnceLock<bool>,
-    /// Whether `ConvKernel::Auto` runs the narrow heads' forward on the unpacked input
-    /// (decided once per device by `ops::conv_nchw::wins`).
-    pub(crate) conv_nchw: std::sync::OnceLock<bool>,
+    /// Whether `ConvKernel::Auto` runs the narrow heads' forward on the unpacked input, read
+    /// from its buffer and from its stage texture (decided once per device by
+    /// `ops::conv_nchw::wins`).
+    pub(crate) conv_nchw: [std::sync::OnceLock<bool>; 2],
     /// Whether the texture packings copy their texels in from a staging buffer rather than
     /// store them (decided once per device by `ops::conv_operands::copies_win`).
     pub(crate) pack_copies: std::sync::OnceLock<bool>,

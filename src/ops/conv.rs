@@ -209,8 +209,19 @@ impl Conv {
     /// with the input unpacked (`ConvKernel::Nchw`; `Auto` where it measured faster), for
     /// benchmarks and tests.
     pub fn forward_reads_unpacked(&self, kernel: ConvKernel, gpu: &Gpu, x_shape: &[usize], w_shape: &[usize]) -> Result<bool> {
+        self.forward_unpacked(kernel, gpu, x_shape, w_shape, false)
+    }
+
+    /// [`Conv::forward_reads_unpacked`] where the input is copied into the direct kernels'
+    /// stage texture, which the kernel then reads (a CPU adapter, rows of whole staging rows,
+    /// a pass that can split: README "The heads on x in place"), for tests.
+    pub fn forward_reads_staged_unpacked(&self, kernel: ConvKernel, gpu: &Gpu, x_shape: &[usize], w_shape: &[usize]) -> Result<bool> {
+        self.forward_unpacked(kernel, gpu, x_shape, w_shape, true)
+    }
+
+    fn forward_unpacked(&self, kernel: ConvKernel, gpu: &Gpu, x_shape: &[usize], w_shape: &[usize], staged: bool) -> Result<bool> {
         let g = self.geometry("conv", x_shape, w_shape)?;
-        Ok(use_fast(kernel, Pass::Forward, &g) && uses_nchw(kernel, gpu, &g))
+        Ok(use_fast(kernel, Pass::Forward, &g) && uses_nchw(kernel, gpu, &g, staged))
     }
 
     /// Resolves the shapes of a call, checking everything the kernels rely on.
@@ -433,7 +444,8 @@ pub(crate) fn use_fast(kernel: ConvKernel, _pass: Pass, _g: &Geometry) -> bool {
 /// do this themselves; call it first to keep the cost out of a timed or counted step.
 pub fn calibrate(gpu: &Gpu) {
     conv_fast::calibrated(gpu);
-    conv_nchw::wins(gpu);
+    conv_nchw::wins(gpu, false);
+    conv_nchw::wins(gpu, true);
     super::conv_operands::copies_win(gpu);
 }
 
@@ -454,11 +466,13 @@ pub(crate) fn operands(gpu: &Gpu, kernel: ConvKernel) -> conv_fast::Operands {
 }
 
 /// Whether the forward of `g` on `kernel` reads its input unpacked (`conv_nchw`): forced by
-/// `Nchw`; with `Auto` where it measured faster (`conv_nchw::wins`) and the packing would not
-/// be kept for the weight gradient (a training step's texture packing serves the forward and
-/// the weight gradient, so skipping it in the forward saves nothing there).
-fn uses_nchw(kernel: ConvKernel, gpu: &Gpu, g: &Geometry) -> bool {
-    conv_nchw::fits(g) && (kernel == ConvKernel::Nchw || (kernel == ConvKernel::Auto && !gpu.keeping_packs() && conv_nchw::wins(gpu)))
+/// `Nchw`; with `Auto` where it measured faster, so read (`conv_nchw::wins`), and either the packing
+/// would not be kept for the weight gradient (a training step's texture packing serves the
+/// forward and the weight gradient, so skipping it in the forward saves nothing there) or the
+/// forward reads x from its stage (`staged`: `conv_nchw::stages`), which the weight gradient
+/// then reads too, kept (`conv_direct_backward_weight_w3`).
+fn uses_nchw(kernel: ConvKernel, gpu: &Gpu, g: &Geometry, staged: bool) -> bool {
+    conv_nchw::fits(g) && (kernel == ConvKernel::Nchw || (kernel == ConvKernel::Auto && (!gpu.keeping_packs() || staged) && conv_nchw::wins(gpu, staged)))
 }
 
 /// Records the forward conv of `g` (shapes already checked by the caller): `y = conv(x, w) + b`.
@@ -474,7 +488,7 @@ pub(crate) fn dispatch_forward(
     y: &Tensor,
 ) -> Result<()> {
     if use_fast(kernel, Pass::Forward, g) {
-        if uses_nchw(kernel, gpu, g) {
+        if uses_nchw(kernel, gpu, g, conv_nchw::stages(gpu, pass, g, x)) {
             return conv_nchw::forward(gpu, pass, g, x, w, b, y);
         }
         return conv_fast::forward(gpu, pass, g, x, w, b, y, operands(gpu, kernel));

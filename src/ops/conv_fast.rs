@@ -16,7 +16,7 @@ const SHADER: Shader = wgsl!("conv_fast");
 /// The texture family: `conv_tex.wgsl` (forward tiles), `conv_tex_pack.wgsl` (the packings
 /// into its textures) and `conv_tex_weight.wgsl` (weight-gradient tiles) use
 /// `conv_fast.wgsl`'s parameters and helpers, `conv_direct.wgsl` (the direct kernels of convs
-/// with few input channels, on x in its stage texture) all four files', and
+/// with few input channels, on x in its stage texture) those files', and
 /// `conv_direct_weight.wgsl` (their weight gradients, and the heads') all five.
 pub(super) const TEX_SHADER: Shader = wgsl!("conv_tex": "conv_fast", "conv_tex", "conv_tex_pack", "conv_tex_weight", "conv_direct", "conv_direct_weight");
 

@@ -17,7 +17,7 @@ fn pack_dy_tex(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, dy: &T
 }
 
 /// Channels of dy as packed for the texture weight gradient (part keeps `copad`): 4 or 8
-/// for the narrow kernels, which then share the packing of [`backward_input`] (`backward`),
+/// for the narrow kernels, which then share the packing of `conv_fast::backward_input` (`backward`),
 /// else whole groups of 16. The shaders' `dy_quads` reads it back.
 fn dy_tex_channels(g: &Geometry) -> usize {
     if g.co <= 8 { g.co.div_ceil(4) * 4 } else { g.co.div_ceil(16) * 16 }

@@ -2,7 +2,9 @@
 //! 1, padding 1, at most 8 output channels (a dispatch per group of 4), W a multiple of 4.
 //! The texture family packs x into a texture first, and on lavapipe the texture stores cost
 //! more than the conv (README
-//! "Measured: Intel Xeon (family 6 model 167)"); this kernel reads x where it lies. Whether it
+//! "Measured: Intel Xeon (family 6 model 167)"); this kernel reads x where it lies, or where
+//! x's rows are whole staging rows, copied as it lies into the direct kernels' stage texture
+//! (README "The heads on x in place"). Whether it
 //! beats the packed kernel depends on the driver and the CPU (its storage loads are gathers,
 //! slow on an AMD Zen 3 with Mesa 22.3), so [`ConvKernel::Auto`](super::conv::ConvKernel)
 //! takes it only where a timing on this machine says so ([`wins`]); `ConvKernel::Nchw`
@@ -81,13 +83,18 @@ fn packed_weights(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: NchwParams, w:
     Ok(t)
 }
 
+/// Whether [`forward`] reads `x` from the direct kernels' stage texture: where `stage_x`
+/// copies it in with no dispatch (`stage_copies`) and it fits.
+pub(crate) fn stages(gpu: &Gpu, pass: &wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor) -> bool {
+    stage_copies(gpu, pass, g, x) && x_texture_fits(gpu, g.n, 4 * g.ci, g.input)
+}
+
 /// Records `y = conv(x, w) + b` for a `g` that [`fits`]: reading x from the direct kernels'
-/// stage texture (`conv_nchw_forward3x3_stage`) where `stage_x` copies it in with no dispatch
-/// (`stage_copies`), else from its buffer.
+/// stage texture (`conv_nchw_forward3x3_stage`) where it [`stages`], else from its buffer.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn forward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor, w: &Tensor, b: Option<&Tensor>, y: &Tensor) -> Result<()> {
     debug_assert!(fits(g));
-    let stage = if stage_copies(gpu, pass, g, x) && x_texture_fits(gpu, g.n, 4 * g.ci, g.input) {
+    let stage = if stages(gpu, pass, g, x) {
         Some(stage_x(gpu, pass, g, x, &conv_fast::params(g, g.ci.div_ceil(4) * 4))?)
     } else {
         None
@@ -108,22 +115,25 @@ pub(crate) fn forward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry,
     Ok(())
 }
 
-/// Whether `ConvKernel::Auto` runs this kernel for the heads on `gpu`: `RENDERNET_CONV_HEADS`
-/// (`nchw` or `packed`) if set, else whether it ran a 16->3 head on 64x64 faster than the
-/// tiled family `Auto` reads (`conv_fast::calibrated`) and to the same bits (best of 3 timed
-/// runs each), measured once per machine and cached (`Gpu::calibrated_choice`).
-pub(crate) fn wins(gpu: &Gpu) -> bool {
-    *gpu.conv_nchw.get_or_init(|| match std::env::var("RENDERNET_CONV_HEADS").as_deref() {
+/// Whether `ConvKernel::Auto` runs this kernel for the heads on `gpu`, reading x from its
+/// stage texture where `staged` ([`stages`]), else from its buffer: `RENDERNET_CONV_HEADS`
+/// (`nchw` or `packed`) if set, else whether it ran a 16->3 head 64 rows high, 64 wide (staged
+/// on a CPU adapter) or 60 wide (never staged), faster than the tiled family `Auto` reads
+/// (`conv_fast::calibrated`) and to the same bits (best of 3 timed runs each), measured once
+/// per machine and cached (`Gpu::calibrated_choice`).
+pub(crate) fn wins(gpu: &Gpu, staged: bool) -> bool {
+    *gpu.conv_nchw[usize::from(staged)].get_or_init(|| match std::env::var("RENDERNET_CONV_HEADS").as_deref() {
         Ok("nchw") => true,
         Ok("packed") => false,
-        // v2: the kernel reads x from its stage where that is copied in.
-        _ => gpu.calibrated_choice("conv-nchw-heads-v2", || measure(gpu).unwrap_or(false)),
+        // The buffer kernel's key is the one it had before the stage kernel existed.
+        _ => gpu.calibrated_choice(if staged { "conv-nchw-heads-staged" } else { "conv-nchw-heads" }, || measure(gpu, staged).unwrap_or(false)),
     })
 }
 
-fn measure(gpu: &Gpu) -> Result<bool> {
+fn measure(gpu: &Gpu, staged: bool) -> Result<bool> {
     let ops = super::conv_fast::calibrated(gpu);
-    let g = Geometry { n: 1, ci: 16, co: 3, input: [1, 64, 64], output: [1, 64, 64], kernel: [1, 3, 3], stride: [1; 3], pad: [0, 1, 1], rank: 4 };
+    let w = if staged { 64 } else { 60 };
+    let g = Geometry { n: 1, ci: 16, co: 3, input: [1, 64, w], output: [1, 64, w], kernel: [1, 3, 3], stride: [1; 3], pad: [0, 1, 1], rank: 4 };
     // Without a bias: the path a transposed conv's input gradient takes.
     super::conv_operands::second_wins(gpu, &g, |k, pass, x, w, y| {
         if k == 0 { super::conv_fast::forward(gpu, pass, &g, x, w, None, y, ops) } else { forward(gpu, pass, &g, x, w, None, y) }
