@@ -469,7 +469,7 @@ pub(crate) fn operands(gpu: &Gpu, kernel: ConvKernel) -> conv_fast::Operands {
 /// `Nchw`; with `Auto` where it measured faster, so read (`conv_nchw::wins`), and either the packing
 /// would not be kept for the weight gradient (a training step's texture packing serves the
 /// forward and the weight gradient, so skipping it in the forward saves nothing there) or the
-/// forward reads x from its stage (`staged`: `conv_nchw::stages`), which the weight gradient
+/// forward reads x from its stage (`staged`: `conv_pack::stage_in_place`), which the weight gradient
 /// then reads too, kept (`conv_direct_backward_weight_w3`).
 fn uses_nchw(kernel: ConvKernel, gpu: &Gpu, g: &Geometry, staged: bool) -> bool {
     conv_nchw::fits(g) && (kernel == ConvKernel::Nchw || (kernel == ConvKernel::Auto && (!gpu.keeping_packs() || staged) && conv_nchw::wins(gpu, staged)))
@@ -488,7 +488,7 @@ pub(crate) fn dispatch_forward(
     y: &Tensor,
 ) -> Result<()> {
     if use_fast(kernel, Pass::Forward, g) {
-        if uses_nchw(kernel, gpu, g, conv_nchw::stages(gpu, pass, g, x)) {
+        if uses_nchw(kernel, gpu, g, super::conv_pack::stage_in_place(gpu, pass, g, x)) {
             return conv_nchw::forward(gpu, pass, g, x, w, b, y);
         }
         return conv_fast::forward(gpu, pass, g, x, w, b, y, operands(gpu, kernel));

@@ -11,8 +11,8 @@
 //! forces it.
 
 use super::conv::Geometry;
-use super::conv_fast::{self, x_texture_fits};
-use super::conv_pack::{stage_copies, stage_x};
+use super::conv_fast;
+use super::conv_pack::{stage_in_place, stage_x};
 use crate::error::Result;
 use crate::gpu::{Arg, Gpu, Packing, Shader, Tensor, grid_1d, wgsl};
 
@@ -83,18 +83,13 @@ fn packed_weights(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: NchwParams, w:
     Ok(t)
 }
 
-/// Whether [`forward`] reads `x` from the direct kernels' stage texture: where `stage_x`
-/// copies it in with no dispatch (`stage_copies`) and it fits.
-pub(crate) fn stages(gpu: &Gpu, pass: &wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor) -> bool {
-    stage_copies(gpu, pass, g, x) && x_texture_fits(gpu, g.n, 4 * g.ci, g.input)
-}
-
 /// Records `y = conv(x, w) + b` for a `g` that [`fits`]: reading x from the direct kernels'
-/// stage texture (`conv_nchw_forward3x3_stage`) where it [`stages`], else from its buffer.
+/// stage texture (`conv_nchw_forward3x3_stage`) where `stage_in_place` says so, else from
+/// its buffer.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn forward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor, w: &Tensor, b: Option<&Tensor>, y: &Tensor) -> Result<()> {
     debug_assert!(fits(g));
-    let stage = if stages(gpu, pass, g, x) {
+    let stage = if stage_in_place(gpu, pass, g, x) {
         Some(stage_x(gpu, pass, g, x, &conv_fast::params(g, g.ci.div_ceil(4) * 4))?)
     } else {
         None
@@ -116,7 +111,7 @@ pub(crate) fn forward(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry,
 }
 
 /// Whether `ConvKernel::Auto` runs this kernel for the heads on `gpu`, reading x from its
-/// stage texture where `staged` ([`stages`]), else from its buffer: `RENDERNET_CONV_HEADS`
+/// stage texture where `staged` (`conv_pack::stage_in_place`), else from its buffer: `RENDERNET_CONV_HEADS`
 /// (`nchw` or `packed`) if set, else whether it ran a 16->3 head 64 rows high, 64 wide (staged
 /// on a CPU adapter) or 60 wide (never staged), faster than the tiled family `Auto` reads
 /// (`conv_fast::calibrated`) and to the same bits (best of 3 timed runs each), measured once

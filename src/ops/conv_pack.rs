@@ -5,7 +5,7 @@
 //! run of its graph to the next while the parameters do not change (`gpu/constant.rs`).
 
 use super::conv::{Geometry, Params};
-use super::conv_fast::{Folded, TEX_SHADER, dispatch, volume};
+use super::conv_fast::{Folded, TEX_SHADER, dispatch, volume, x_texture_fits};
 use super::conv_window;
 use crate::error::Result;
 use crate::gpu::{Arg, Gpu, Packing, Tensor, staging_pitch};
@@ -140,6 +140,12 @@ pub(super) fn stage_copies(gpu: &Gpu, pass: &wgpu::ComputePass<'_>, g: &Geometry
     let iw = g.input[2];
     let cpu = gpu.info.device_type == wgpu::DeviceType::Cpu;
     iw.is_multiple_of(4) && staging_pitch(iw / 4) == iw / 4 && x.offset().is_multiple_of(16) && cpu && gpu.can_split(pass)
+}
+
+/// Whether kernels that can read `x` in its stage should: [`stage_copies`], and the stage fits
+/// one 3D texture (the heads' forward and weight gradient, `conv_nchw`, `conv_fast_weight`).
+pub(super) fn stage_in_place(gpu: &Gpu, pass: &wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor) -> bool {
+    stage_copies(gpu, pass, g, x) && x_texture_fits(gpu, g.n, 4 * g.ci, g.input)
 }
 
 /// `x` ([N, C, input...] of `g`) copied into a 3D texture of 4 voxels along W a texel, which
