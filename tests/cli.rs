@@ -67,6 +67,29 @@ fn bench_json_reports_speed_against_the_same_run_ceiling() {
     }
 }
 
+/// `bench --pass` keeps that pass's rows alone (here the 16->3 head's weight gradient), and
+/// refuses a pass it does not time, naming those it does.
+#[test]
+fn bench_times_one_pass_alone() {
+    let out = rendernet()
+        .args(["bench", "--json", "--filter", "16->3", "--pass", "backward_weight", "--kernel", "texture", "--repeat", "1"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "bench failed: {}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("bench --json prints JSON");
+    let rows: Vec<&str> = v["rows"].as_array().expect("rows").iter().map(|r| r["pass"].as_str().unwrap()).collect();
+    assert_eq!(rows, ["backward_weight"], "{v}");
+    // The whole-network rows too: the forward's two, not the training steps.
+    let out = rendernet().args(["bench", "--json", "--filter", "rendernet", "--pass", "forward", "--repeat", "1"]).output().unwrap();
+    assert!(out.status.success(), "bench failed: {}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("bench --json prints JSON");
+    let rows: Vec<&str> = v["rows"].as_array().expect("rows").iter().map(|r| r["pass"].as_str().unwrap()).collect();
+    assert_eq!(rows, ["forward", "forward"], "{v}");
+    let refused = rendernet().args(["bench", "--pass", "sideways"]).output().unwrap();
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success() && err.contains("backward_input") && err.contains("train_step"), "{err}");
+}
+
 /// `bench --filter resample`: the resampling's passes per way of reading the grid, the grid
 /// gradient (buffer only) left out when `--kernel` asks for textures alone.
 #[test]

@@ -25,6 +25,9 @@ pub struct BenchArgs {
     /// Only cases whose op or shape contains this text (e.g. conv3d, projection).
     #[arg(long)]
     filter: Option<String>,
+    /// Only this pass: e.g. to sample one kernel alone with `ci/jit-profile.sh`.
+    #[arg(long, value_parser = ["forward", "backward_input", "backward_weight", "backward_pose", "train_step"])]
+    pass: Option<String>,
     /// Samples per measurement; the median is reported.
     #[arg(long, default_value_t = 5)]
     repeat: usize,
@@ -45,7 +48,7 @@ pub struct BenchArgs {
     /// lane-uniform address, a subgroup shuffle, an integer division), and what a store to a
     /// storage buffer or a storage texture costs: on lavapipe this changes several-fold with
     /// the driver and the CPU, and decides how a kernel should read and write its operands.
-    #[arg(long, conflicts_with_all = ["filter", "kernel", "profile"])]
+    #[arg(long, conflicts_with_all = ["filter", "pass", "kernel", "profile"])]
     operands: bool,
 }
 
@@ -257,7 +260,7 @@ fn finite(v: f64) -> Option<f64> {
 /// training step on the largest patch of the schedule at batch 1 and 2, with the executor's
 /// dispatch, submit and memory figures.
 /// Timed by wall clock around each submit and wait (the executor owns its encoder).
-fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine, profile: bool) -> Result<Vec<(String, serde_json::Value)>> {
+fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine, profile: bool, only: Option<&str>) -> Result<Vec<(String, serde_json::Value)>> {
     let p = Preset::tiny();
     let head = Head::Phong(phong_of(&Light::default()));
     let mut rows = Vec::new();
@@ -271,7 +274,7 @@ fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine, profile: bool) -> Result<Ve
         ("train_step", [p.cam / 2; 2], true, "", 1),
         ("train_step", [p.cam / 2; 2], true, "", 2),
     ];
-    for (pass, win, train, what, batch) in cases {
+    for (pass, win, train, what, batch) in cases.into_iter().filter(|c| only.is_none_or(|p| p == c.0)) {
         let net = RenderNet::build(&p, head, batch, win, train)?;
         let flops = net.graph.forward_flops() * if train { 3.0 } else { 1.0 };
         let mut ex = Executor::new(gpu, net.graph.clone(), 0)?;
@@ -367,6 +370,9 @@ pub fn run(a: BenchArgs) -> Result<()> {
     if let Some(f) = &a.filter {
         all.retain(|c| c.op.contains(f.as_str()) || c.shape.contains(f.as_str()));
     }
+    if let Some(p) = &a.pass {
+        all.retain(|c| c.pass == p);
+    }
     let m = Machine { adapter: gpu.info.name.clone(), cpu: bench::cpu_model(), probe: bench::FmaProbe::new(&gpu, clock)? };
     let start = m.probe.best(&gpu, 5)?;
     if !a.json {
@@ -429,7 +435,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
         i = j;
     }
     if with_model {
-        for (text, row) in model_rows(&gpu, a.repeat, &m, a.profile)? {
+        for (text, row) in model_rows(&gpu, a.repeat, &m, a.profile, a.pass.as_deref())? {
             if a.json {
                 json.push(row);
             } else {
