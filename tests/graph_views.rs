@@ -231,3 +231,52 @@ fn a_joint_part_cannot_be_a_resize_convolution() {
     assert!(e.contains("'a.weight'") && e.contains("concatenation"), "{e}");
     ex.keep_resize_conv(gpu(), lone).unwrap();
 }
+
+// An add hands its output's gradient on as one input's first gradient, the same tensor with no
+// copy (`Executor::hands_on`): h = prelu(x), inner = h + h, outer = h + inner, MSE against a
+// target. outer's backward hands dy to h; inner's then sums two more contributions into that
+// very tensor. Against the same graph with outer's gradient asked for by the caller (so dy
+// stays outer's and h gets a copy): gradients equal to the bit, one dispatch fewer, and both
+// match finite differences of mse(3 prelu(x), t).
+#[test]
+fn an_add_hands_its_gradient_on_without_a_copy() {
+    let (shape, n) = ([1usize, 3, 5, 7], 105usize);
+    let mut g = Graph::new();
+    let x = g.input("x", &shape).unwrap();
+    let t = g.input("target", &shape).unwrap();
+    let alpha = g.param("act.alpha", &[3], Init::Constant(0.25)).unwrap();
+    let h = g.apply("act", Op::Prelu, &[x, alpha]).unwrap();
+    let inner = g.apply("inner", Op::Add, &[h, h]).unwrap();
+    let outer = g.apply("outer", Op::Add, &[h, inner]).unwrap();
+    let loss = g.apply("loss", Op::Loss(Loss::Mse), &[outer, t]).unwrap();
+    let mut rng = Rng(5);
+    // Away from PReLU's kink at 0 so finite differences are clean.
+    let xv: Vec<f64> = f32_round(&rng.vec(n, -2.0, 2.0)).into_iter().map(|v| if v.abs() < 0.01 { 0.5 } else { v }).collect();
+    let tv = f32_round(&rng.vec(n, -1.0, 1.0));
+    let run = |copy: bool| {
+        let mut ex = Executor::new(gpu(), g.clone(), 3).unwrap();
+        ex.feed(gpu(), x, &f32v(&xv)).unwrap();
+        ex.feed(gpu(), t, &f32v(&tv)).unwrap();
+        ex.want_grad(x);
+        if copy {
+            ex.want_grad(outer);
+        }
+        ex.training = false;
+        let stats = ex.backward(gpu(), loss).unwrap();
+        (stats.dispatches, ex.grad(gpu(), x).unwrap(), ex.grad(gpu(), alpha).unwrap())
+    };
+    let (handed, copied) = (run(false), run(true));
+    assert_eq!(handed.1, copied.1, "d loss / d x");
+    assert_eq!(handed.2, copied.2, "d loss / d alpha");
+    assert_eq!(handed.0 + 1, copied.0, "dispatches handing dy on, then copying it");
+    let prelu = |x: &[f64], a: f64| -> Vec<f64> { x.iter().map(|&v| if v > 0.0 { v } else { a * v }).collect() };
+    let reference = |x: &[f64], a: &[f64]| -> f64 {
+        let y: Vec<f64> = x.chunks(35).zip(a).flat_map(|(c, &a)| prelu(c, a)).collect();
+        y.iter().zip(&tv).map(|(y, t)| (3.0 * y - t).powi(2)).sum::<f64>() / n as f64
+    };
+    let a = [0.25; 3];
+    let f64v = |v: &[f32]| -> Vec<f64> { v.iter().map(|&v| v as f64).collect() };
+    // Sums of a few f32 terms over 105 values: errors ~1e-7 of gradients ~1e-2.
+    assert_close("d loss / d x", &f64v(&handed.1), &fd_grad(&xv, |x| reference(x, &a)), 1e-6, 1e-3);
+    assert_close("d loss / d alpha", &f64v(&handed.2), &fd_grad(&a, |a| reference(&xv, a)), 1e-6, 1e-3);
+}

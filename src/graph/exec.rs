@@ -491,14 +491,24 @@ impl Executor {
                 }
             } else {
                 // Each input wanting a gradient gets its own tensor on first contribution;
-                // later contributions go to a temporary and are summed in.
+                // later contributions go to a temporary and are summed in. An add hands dy itself
+                // to one input whose gradient it starts (`hands_on`): a dispatch fewer.
                 let mut targets: Vec<Option<(Tensor, bool)>> = Vec::new(); // (tensor, accumulate)
+                let mut handed = false;
                 for (j, i) in n.inputs.iter().enumerate() {
                     if !(self.grad_wanted[i.0] || produced_by_bw[i.0]) || !n.op.differentiable(j) {
                         targets.push(None);
                         continue;
                     }
                     let seen = self.grads[i.0].is_some() || n.inputs[..j].contains(i);
+                    if !handed && !seen && self.hands_on(n, *i, &dy) {
+                        self.grads[i.0] = Some(dy.clone());
+                        // dy is the input's now: released at the input's last gradient use, not here.
+                        self.grads[n.output.0] = None;
+                        handed = true;
+                        targets.push(None);
+                        continue;
+                    }
                     let t = if seen { self.pool.tensor(gpu, &self.graph.values[i.0].shape)? } else { self.first_grad(gpu, *i, &mut total)? };
                     targets.push(Some((t, seen)));
                 }

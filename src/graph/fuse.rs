@@ -131,6 +131,20 @@ impl Executor {
         Ok(t)
     }
 
+    /// Whether add node `n` can hand its output's gradient `dy` on as input `i`'s first
+    /// gradient, the same tensor with no copy: `i` is a computed or fed value (a parameter's
+    /// gradient lives in the flat buffer, `first_grad`), nobody asked for the output's
+    /// gradient, and dy is a pooled tensor of `i`'s shape (a view may outlive its buffer).
+    /// Later contributions to `i` are then summed into dy in place, which nothing reads again.
+    pub(super) fn hands_on(&self, n: &Node, i: Value, dy: &Tensor) -> bool {
+        matches!(n.op, super::Op::Add)
+            && !matches!(self.graph.values[i.0].kind, Kind::Param(_))
+            && self.flat.joint(i).is_none()
+            && !self.grad_wanted[n.output.0]
+            && !dy.is_view()
+            && dy.shape() == self.graph.values[i.0].shape.as_slice()
+    }
+
     /// The nodes of backward run `bw` whose backward differentiates an input past their first
     /// (a conv's weights, the resampling's pose): that gradient packs the input as the
     /// forward did, so the forward keeps its packings (gpu/kept.rs).
