@@ -78,13 +78,15 @@ fn bce_clamps_and_zeroes_the_gradient_outside() {
 
 #[test]
 fn per_image_mse_and_psnr() {
-    let shape = [3, 2, 5, 7];
-    let n: usize = shape.iter().product();
-    let mut rng = Rng(23);
-    let (a, b) = (f32_round(&rng.vec(n, 0.0, 1.0)), f32_round(&rng.vec(n, 0.0, 1.0)));
-    let (ta, tb, tm) = (upload(&shape, &a), upload(&shape, &b), zeros(&[3]));
-    run(|p| gpu_per_image_mse(gpu(), p, &ta, &tb, &tm));
-    assert_close("per-image mse", &download(&tm), &per_image_mse(&a, &b, 3), 1e-7, 1e-5);
+    // An odd size, then one of whole vec4s (the `_vec4` terms).
+    for shape in [[3, 2, 5, 7], [3, 2, 5, 8]] {
+        let n: usize = shape.iter().product();
+        let mut rng = Rng(23);
+        let (a, b) = (f32_round(&rng.vec(n, 0.0, 1.0)), f32_round(&rng.vec(n, 0.0, 1.0)));
+        let (ta, tb, tm) = (upload(&shape, &a), upload(&shape, &b), zeros(&[3]));
+        run(|p| gpu_per_image_mse(gpu(), p, &ta, &tb, &tm));
+        assert_close(&format!("per-image mse {shape:?}"), &download(&tm), &per_image_mse(&a, &b, 3), 1e-7, 1e-5);
+    }
 
     assert!((psnr_from_mse(0.01, 1.0) - 20.0).abs() < 1e-5);
     assert!((psnr_from_mse(1e-4, 1.0) - 40.0).abs() < 1e-4);

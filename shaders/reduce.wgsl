@@ -1,15 +1,15 @@
+// prepend: workgroup_sum.wgsl
 // Deterministic sums. `x` is viewed as [A, B, C]; out[b] = scale * sum over a and c of
 // x[a, b, c]. One 64-invocation workgroup per output element: strided partial sums then a
 // fixed-order tree, so results do not depend on scheduling (bit-identical reruns).
-// Serves bias and PReLU-alpha gradients (A = N, B = channels, C = spatial), loss means
-// (A = B = 1) and per-parameter gradient partials (pose, light).
+// Serves bias and PReLU-alpha gradients (A = N, B = channels, C = spatial), per-image MSE
+// (A = 1, B = images) and per-parameter gradient partials (pose, light); the losses' means
+// sum their terms as they make them (loss.wgsl), with the same tree (workgroup_sum.wgsl).
 
 struct Params { a: u32, b: u32, c: u32, scale: f32 }
 @group(0) @binding(0) var<uniform> p: Params;
 @group(0) @binding(1) var<storage, read> x: array<f32>;
 @group(0) @binding(2) var<storage, read_write> out: array<f32>;
-
-var<workgroup> partial: array<f32, 64>;
 
 @compute @workgroup_size(64)
 fn sum_outer_inner(@builtin(local_invocation_index) lid: u32,
@@ -32,13 +32,8 @@ fn sum_outer_inner(@builtin(local_invocation_index) lid: u32,
 
 // out[b] = scale * the sum of every invocation's `s`, in a fixed-order tree.
 fn tree_sum(lid: u32, s: f32, valid: bool, b: u32) {
-    partial[lid] = s;
-    workgroupBarrier();
-    for (var w = 32u; w > 0u; w >>= 1u) {
-        if (lid < w) { partial[lid] += partial[lid + w]; }
-        workgroupBarrier();
-    }
-    if (valid && lid == 0u) { out[b] = partial[0] * p.scale; }
+    let total = workgroup_sum(lid, s);
+    if (valid && lid == 0u) { out[b] = total * p.scale; }
 }
 
 // The same for C a multiple of 4: four values a load, and a loop over A around a loop over C

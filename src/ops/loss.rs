@@ -15,7 +15,7 @@ use super::{elementwise, expect_shape, reduce};
 use crate::error::{Result, shape_err};
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
-const SHADER: Shader = wgsl!("loss");
+const SHADER: Shader = wgsl!("loss": "workgroup_sum", "loss");
 
 /// The clamp BCE applies to predictions, in f32 (`1 - BCE_EPS` rounds to 0.99999988).
 pub const BCE_EPS: f32 = 1e-7;
@@ -52,17 +52,16 @@ impl Loss {
         target: &Tensor,
         loss: &Tensor,
     ) -> Result<()> {
-        let (op, entry) = match self {
-            Loss::Mse => ("mse_forward", "sq_diff"),
-            Loss::Bce => ("bce_forward", "bce_terms"),
+        let (op, entry, entry4) = match self {
+            Loss::Mse => ("mse_forward", "mse_mean", "mse_mean_vec4"),
+            Loss::Bce => ("bce_forward", "bce_mean", "bce_mean_vec4"),
         };
         expect_shape(op, "target", target, pred.shape())?;
         expect_shape(op, "loss", loss, &[1])?;
         let n = pred.numel();
-        let terms = gpu.scratch(pred.shape())?;
-        let args = [Arg::R(pred), Arg::R(target), Arg::W(&terms)];
-        elementwise(gpu, pass, SHADER, entry, &Self::params(n), &args, n)?;
-        reduce::sum_outer_inner(gpu, pass, &terms, [1, 1, n], 1.0 / n as f32, loss)
+        // One workgroup sums the terms as it makes them (see `mean_of_terms`).
+        let entry = if n.is_multiple_of(4) { entry4 } else { entry };
+        gpu.dispatch(pass, SHADER, entry, &Self::params(n), &[Arg::R(pred), Arg::R(target), Arg::W(loss)], [1, 1, 1])
     }
 
     /// Writes `dpred` (the prediction's shape) from the upstream gradient `dloss` `[1]`.

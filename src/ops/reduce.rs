@@ -5,7 +5,7 @@
 use crate::error::{Result, shape_err};
 use crate::gpu::{Arg, Gpu, Shader, Tensor, grid_1d, wgsl};
 
-const SHADER: Shader = wgsl!("reduce");
+const SHADER: Shader = wgsl!("reduce": "workgroup_sum", "reduce");
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -36,7 +36,7 @@ pub fn sum_outer_inner(
     // One workgroup per output value: grid_1d with a workgroup size of 1 counts groups.
     let wg = grid_1d(b as u64, 1)?;
     // Four values a load where every run along C splits into whole vec4s and is long enough
-    // to keep the 64 invocations busy (a loss mean, a bias or PReLU gradient over space).
+    // to keep the 64 invocations busy (a per-image MSE, a bias or PReLU gradient over space).
     let entry = if c.is_multiple_of(4) && c >= 256 { "sum_outer_inner_vec4" } else { "sum_outer_inner" };
     gpu.dispatch(pass, SHADER, entry, &params, &[Arg::R(x), Arg::W(out)], wg)
 }
