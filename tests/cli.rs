@@ -88,6 +88,10 @@ fn bench_times_one_pass_alone() {
     let refused = rendernet().args(["bench", "--pass", "sideways"]).output().unwrap();
     let err = String::from_utf8_lossy(&refused.stderr);
     assert!(!refused.status.success() && err.contains("backward_input") && err.contains("train_step"), "{err}");
+    // --profile times whole-network rows only, which a kernel pass leaves out.
+    let refused = rendernet().args(["bench", "--pass", "backward_weight", "--profile"]).output().unwrap();
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success() && err.contains("--pass backward_weight"), "{err}");
 }
 
 /// `bench --filter resample`: the resampling's passes per way of reading the grid, the grid

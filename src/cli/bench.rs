@@ -361,6 +361,11 @@ pub fn run(a: BenchArgs) -> Result<()> {
             a.filter.as_deref().unwrap_or_default()
         )));
     }
+    if let Some(p) = a.pass.as_deref().filter(|p| a.profile && !["forward", "train_step"].contains(p)) {
+        return Err(rendernet::Error::Invalid(format!(
+            "--profile times the whole-network rows (forward, train_step), which --pass {p} leaves out"
+        )));
+    }
     let gpu = Gpu::new()?;
     let clock = bench::default_clock(&gpu);
     if a.operands {
