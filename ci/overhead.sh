@@ -5,8 +5,9 @@
 # into textures, passes and submits; no arithmetic), alternating the two so both see the same
 # machine load. The difference is what the kernels themselves cost; the rest is fixed cost per
 # dispatch and copy, which fewer dispatches, not faster kernels, would cut.
-# Each line ends with the row's dispatches: the two runs must make the same ones (the kernel
-# choices come from the calibration cache the real run fills first; see README "Benchmarks").
+# Each line ends with the row's dispatches and its same-run FMA ceiling: the two runs must
+# make the same dispatches (the kernel choices come from the calibration cache the real run
+# fills first; see README "Benchmarks").
 # Usage: bash ci/overhead.sh [rounds]   (default 2; builds the release binary; needs python3)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -29,8 +30,8 @@ for r in $(seq "$rounds"); do
     for dir in shaders "$empty"; do
         what=$([[ $dir == shaders ]] && echo "kernels" || echo "empty  ")
         RENDERNET_SHADER_DIR=$dir "$bin" bench --filter rendernet --repeat 7 | awk -v w="$what" '/^rendernet/ {
-            match($0, /(forward|train_step) +auto +[0-9.]+/); split(substr($0, RSTART, RLENGTH), f, " +");
+            match($0, /(forward|train_step) +auto +[0-9.]+ +[0-9.]+ +[0-9.]+% +[0-9.]+/); split(substr($0, RSTART, RLENGTH), f, " +");
             d = ""; if (match($0, /\([0-9]+ dispatches/)) d = substr($0, RSTART + 1, RLENGTH - 1);
-            sub(/^rendernet +/, ""); sub(/ +(forward|train_step).*/, ""); printf "%s %-52s %-10s %8.1f ms  %s\n", w, $0, f[1], f[3], d }'
+            sub(/^rendernet +/, ""); sub(/ +(forward|train_step).*/, ""); printf "%s %-52s %-10s %8.1f ms  %s, same-run FMA ceiling %s GFLOP/s\n", w, $0, f[1], f[3], d, f[6] }'
     done
 done

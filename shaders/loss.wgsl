@@ -85,8 +85,9 @@ fn terms_of(x: vec4<f32>, t: vec4<f32>, bce: bool) -> vec4<f32> {
     return e * e;
 }
 
-// Each entry point reads its operands one way only (pred or pred4: one binding, two types).
-fn mean_of_terms(lid: u32, s: f32) {
+// Writes the mean of the invocations' sums `s`. Each entry point reads its operands one way
+// only (pred or pred4: one binding, two types), so the two loops below are separate functions.
+fn write_mean(lid: u32, s: f32) {
     let total = workgroup_sum(lid, s);
     if (lid == 0u) { mean[0] = total * p.inv_n; }
 }
@@ -108,13 +109,13 @@ fn terms_from4(lid: u32, bce: bool) -> f32 {
 }
 
 @compute @workgroup_size(64)
-fn mse_mean(@builtin(local_invocation_index) lid: u32) { mean_of_terms(lid, terms_from(lid, false)); }
+fn mse_mean(@builtin(local_invocation_index) lid: u32) { write_mean(lid, terms_from(lid, false)); }
 
 @compute @workgroup_size(64)
-fn mse_mean_vec4(@builtin(local_invocation_index) lid: u32) { mean_of_terms(lid, terms_from4(lid, false)); }
+fn mse_mean_vec4(@builtin(local_invocation_index) lid: u32) { write_mean(lid, terms_from4(lid, false)); }
 
 @compute @workgroup_size(64)
-fn bce_mean(@builtin(local_invocation_index) lid: u32) { mean_of_terms(lid, terms_from(lid, true)); }
+fn bce_mean(@builtin(local_invocation_index) lid: u32) { write_mean(lid, terms_from(lid, true)); }
 
 @compute @workgroup_size(64)
-fn bce_mean_vec4(@builtin(local_invocation_index) lid: u32) { mean_of_terms(lid, terms_from4(lid, true)); }
+fn bce_mean_vec4(@builtin(local_invocation_index) lid: u32) { write_mean(lid, terms_from4(lid, true)); }

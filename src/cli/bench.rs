@@ -26,7 +26,7 @@ pub struct BenchArgs {
     #[arg(long)]
     filter: Option<String>,
     /// Only this pass: e.g. to sample one kernel alone with `ci/jit-profile.sh`.
-    #[arg(long, value_parser = ["forward", "backward_input", "backward_weight", "backward_pose", "train_step"])]
+    #[arg(long, value_parser = PASS_NAMES)]
     pass: Option<String>,
     /// Samples per measurement; the median is reported.
     #[arg(long, default_value_t = 5)]
@@ -74,6 +74,13 @@ fn pass_name(p: Pass) -> &'static str {
 }
 
 const PASSES: [Pass; 3] = [Pass::Forward, Pass::BackwardInput, Pass::BackwardWeight];
+
+/// Every row's pass: the convs' ([`pass_name`]), the resampling's pose gradient and the
+/// whole network's training step (`--pass` takes one).
+const PASS_NAMES: [&str; 5] = ["forward", "backward_input", "backward_weight", "backward_pose", "train_step"];
+
+/// The passes of the whole-network rows (`model_rows`), which `--profile` times.
+const MODEL_PASSES: [&str; 2] = ["forward", "train_step"];
 
 const KERNELS: [(&str, ConvKernel); 4] =
     [("reference", ConvKernel::Reference), ("fast", ConvKernel::Buffers), ("texture", ConvKernel::Texture), ("nchw", ConvKernel::Nchw)];
@@ -361,7 +368,7 @@ pub fn run(a: BenchArgs) -> Result<()> {
             a.filter.as_deref().unwrap_or_default()
         )));
     }
-    if let Some(p) = a.pass.as_deref().filter(|p| a.profile && !["forward", "train_step"].contains(p)) {
+    if let Some(p) = a.pass.as_deref().filter(|p| a.profile && !MODEL_PASSES.contains(p)) {
         return Err(rendernet::Error::Invalid(format!(
             "--profile times the whole-network rows (forward, train_step), which --pass {p} leaves out"
         )));

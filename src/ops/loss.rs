@@ -59,7 +59,7 @@ impl Loss {
         expect_shape(op, "target", target, pred.shape())?;
         expect_shape(op, "loss", loss, &[1])?;
         let n = pred.numel();
-        // One workgroup sums the terms as it makes them (see `mean_of_terms`).
+        // One workgroup sums the terms as it makes them (`terms_from`, `write_mean` in loss.wgsl).
         let entry = if n.is_multiple_of(4) { entry4 } else { entry };
         gpu.dispatch(pass, SHADER, entry, &Self::params(n), &[Arg::R(pred), Arg::R(target), Arg::W(loss)], [1, 1, 1])
     }
