@@ -21,7 +21,7 @@ pub fn gpu() -> &'static Gpu {
         let gpu = Gpu::new().unwrap_or_else(|e| panic!("kernel tests need a GPU or lavapipe: {e}"));
         // Packings copy their texels in whatever this machine's calibration would say, so the
         // copies are what every texture test checks (`run_unsplit` checks the stores).
-        gpu.settle_pack_copies(true);
+        gpu.settle_pack_copies(0);
         gpu
     })
 }

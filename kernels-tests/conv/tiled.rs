@@ -165,16 +165,19 @@ fn heads_weight_gradient_reads_x_in_its_stage() {
     check(&with(conv2d([3, 3], [1, 1], Padding::explicit_2d([1, 2], [0, 0])), 2, 16, 5, [1, 7, 64]), 141);
     check(&with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 1, 12, 8, [2, 3, 64]), 142);
     check(&with(conv2d([3, 3], [1, 1], Padding::explicit_2d([0, 0], [0, 0])), 2, 16, 2, [1, 4, 64]), 143);
-    let (splits, cpu) = splits_where_packings_store(&head, |op, gpu, p, x, dw, dy| op.backward_weight(head.kernel, gpu, p, x, dy, dw));
+    let (splits, cpu) = splits_where_packings_copy_from(&head, usize::MAX, &|op, gpu, p, x, dw, dy| op.backward_weight(head.kernel, gpu, p, x, dy, dw));
     assert_eq!(splits, u64::from(cpu), "splits of the head's weight gradient");
 }
 
+/// A call on a conv: its op, the adapter, the pass and tensors of its input, weight and output shapes.
+type OnConv<'a> = dyn Fn(&Conv, &rendernet::Gpu, &mut wgpu::ComputePass<'_>, &Tensor, &Tensor, &Tensor) -> rendernet::Result<()> + 'a;
 /// The pass splits of one call of `f` (conv `c`'s op, the adapter, the pass, and zero tensors
-/// of `c`'s input, weight and output shapes) on a second adapter settled to store its packings,
-/// where only a copy into a texture splits a pass; and whether that adapter is a CPU.
-fn splits_where_packings_store(c: &Case, f: impl Fn(&Conv, &rendernet::Gpu, &mut wgpu::ComputePass<'_>, &Tensor, &Tensor, &Tensor) -> rendernet::Result<()>) -> (u64, bool) {
+/// of `c`'s input, weight and output shapes) on a second adapter settled to copy in the
+/// packings of at least `min_texels` texels and store the others, where only a copy into a
+/// texture splits a pass; and whether that adapter is a CPU.
+fn splits_where_packings_copy_from(c: &Case, min_texels: usize, f: &OnConv) -> (u64, bool) {
     let stores = rendernet::Gpu::new().expect("a second adapter");
-    assert!(stores.settle_pack_copies(false));
+    assert!(stores.settle_pack_copies(min_texels));
     let Op::Conv(op) = c.op else { panic!("{c:?} is not a conv") };
     let g = geom(c);
     let zeros = |s: &[usize]| Tensor::zeros(&stores, s).unwrap();
@@ -216,8 +219,21 @@ fn unpacked_heads_forward_reads_x_in_its_stage() {
     let head = Case { ci: 16, co: 3, input: [1, 9, 64], kernel: ConvKernel::Nchw, ..conv2d([3, 3], [1, 1], Padding::Same) };
     check(&head, 150);
     check(&Case { ci: 5, co: 8, input: [1, 10, 64], ..head }, 151);
-    let (splits, cpu) = splits_where_packings_store(&head, |op, gpu, p, x, w, y| op.forward(head.kernel, gpu, p, x, w, None, y));
+    let (splits, cpu) = splits_where_packings_copy_from(&head, usize::MAX, &|op, gpu, p, x, w, y| op.forward(head.kernel, gpu, p, x, w, None, y));
     assert_eq!(splits, u64::from(cpu), "splits of the head's forward");
+}
+
+/// Only packings of at least the settled size are copied in (each copy splits the pass, at a
+/// cost that does not shrink with the texture): conv3d 32->32 3^3 on 1x8x8x16 packs its
+/// weights into 32 x 216 = 6912 texels (through windows: 110 KiB) and x into 16 x 8 x 64 = 8192.
+/// Settled at 0, 6913, 8192 and 8193 texels, a CPU adapter splits its forward pass 2, 1, 1, 0 times.
+#[test]
+fn only_packings_of_the_settled_size_are_copied_in() {
+    let c = Case { n: 1, ci: 32, co: 32, input: [8, 8, 16], kernel: ConvKernel::Texture, ..conv3d([3, 3, 3], [1, 1, 1], Padding::Same) };
+    for (min_texels, copies) in [(0, 2), (6913, 1), (8192, 1), (8193, 0)] {
+        let (splits, cpu) = splits_where_packings_copy_from(&c, min_texels, &|op, gpu, p, x, w, y| op.forward(c.kernel, gpu, p, x, w, None, y));
+        assert_eq!(splits, if cpu && copies_on_this_adapter() { copies } else { 0 }, "splits with copies from {min_texels} texels");
+    }
 }
 
 /// Widths that are multiples of 4 (12 and 8, not powers of two), where the texture family
@@ -354,7 +370,7 @@ fn a_first_layer_grid_of_whole_rows_is_copied_in_where_packings_store() {
     let c = Case { n: 1, ci: 1, co: 8, input: [3, 4, 64], kernel: ConvKernel::Texture, ..conv3d([5, 5, 5], [2, 2, 2], Padding::Same) };
     let want = passes(&c, c.kernel, 360);
     let stores = rendernet::Gpu::new().expect("a second adapter");
-    assert!(stores.settle_pack_copies(false));
+    assert!(stores.settle_pack_copies(usize::MAX));
     let Op::Conv(op) = c.op else { unreachable!() };
     let g = geom(&c);
     let (xs, ws, ys) = (shape(c.d2, c.n, c.ci, g.input), w_shape(&c), shape(c.d2, c.n, c.co, g.output));

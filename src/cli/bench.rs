@@ -292,12 +292,13 @@ fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine, profile: bool, only: Option
         let stats = step(&mut ex)?; // pipelines compile on first use
         let mut ms = Vec::new();
         let mut ceilings = Vec::new();
-        let mut again = stats;
+        let (mut again, mut copies) = (stats, 0);
         for _ in 0..repeat.max(1) {
             ceilings.push(m.probe.sample_row(gpu)?);
-            let t = std::time::Instant::now();
+            let (t, splits) = (std::time::Instant::now(), gpu.pass_splits());
             again = step(&mut ex)?;
             ms.push(t.elapsed().as_secs_f64() * 1e3);
+            copies = gpu.pass_splits() - splits;
         }
         let (ms, ceiling) = (bench::median(&ms), bench::median(&ceilings));
         let gflops = flops / (ms * 1e6);
@@ -308,12 +309,13 @@ fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine, profile: bool, only: Option
         json["dispatches"] = again.dispatches.into();
         json["first_run_dispatches"] = stats.dispatches.into();
         json["submits_per_step"] = stats.submits.into();
+        json["copies_per_step"] = copies.into();
         json["pool_bytes"] = stats.pool_bytes.into();
         json["tensor_bytes"] = stats.tensor_bytes.into();
         json["scratch_bytes"] = stats.scratch_bytes.into();
         json["created_per_step"] = again.created.into();
         let text = format!(
-            "{:<17} {:<34} {:<16} {:<9} {ms:>10.1} {gflops:>9.2} {:>8.1}% {:>9.1}  ({} dispatches ({} in the first run), {} submit, {} GPU objects created after the first run, pool {:.1} MiB for {:.1} MiB of tensors, scratch {:.1} MiB)",
+            "{:<17} {:<34} {:<16} {:<9} {ms:>10.1} {gflops:>9.2} {:>8.1}% {:>9.1}  ({} dispatches ({} in the first run), {copies} copies into textures, {} submit, {} GPU objects created after the first run, pool {:.1} MiB for {:.1} MiB of tensors, scratch {:.1} MiB)",
             "rendernet", shape, pass, "auto", 100.0 * gflops / ceiling, ceiling, again.dispatches, stats.dispatches, stats.submits, again.created,
             stats.pool_bytes as f64 / 1048576.0, stats.tensor_bytes as f64 / 1048576.0, stats.scratch_bytes as f64 / 1048576.0
         );

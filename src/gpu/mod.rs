@@ -56,9 +56,9 @@ pub struct Gpu {
     /// from its buffer and from its stage texture (decided once per device by
     /// `ops::conv_nchw::wins`).
     pub(crate) conv_nchw: [std::sync::OnceLock<bool>; 2],
-    /// Whether the texture packings copy their texels in from a staging buffer rather than
-    /// store them (decided once per device by `ops::conv_operands::copies_win`).
-    pub(crate) pack_copies: std::sync::OnceLock<bool>,
+    /// The fewest texels of a texture packing that copies them in from a staging buffer
+    /// rather than storing them (decided once per device by `ops::conv_operands::copy_min_texels`).
+    pub(crate) pack_copies: std::sync::OnceLock<usize>,
 }
 
 impl Gpu {

@@ -113,12 +113,12 @@ impl Gpu {
         Ok(())
     }
 
-    /// Settles whether the texture packings on a CPU adapter copy their texels in (`true`) or
-    /// store them, instead of measuring it on first use (the `conv-pack-copies` calibration):
-    /// for tests that must take one path whatever the machine measures. False if the choice
-    /// was already settled the other way.
-    pub fn settle_pack_copies(&self, copies: bool) -> bool {
-        *self.pack_copies.get_or_init(|| copies) == copies
+    /// Settles which texture packings on a CPU adapter copy their texels in: those of at
+    /// least `min_texels` texels (0: every one, `usize::MAX`: none; the others store them),
+    /// instead of the `conv-pack-copies` calibration on first use: for tests that must take
+    /// one path whatever the machine measures. False if it was already settled otherwise.
+    pub fn settle_pack_copies(&self, min_texels: usize) -> bool {
+        *self.pack_copies.get_or_init(|| min_texels) == min_texels
     }
 
     /// Passes this thread has ended for a copy ([`Gpu::copy_to_texture`]) so far.

@@ -439,14 +439,14 @@ pub(crate) fn use_fast(kernel: ConvKernel, _pass: Pass, _g: &Geometry) -> bool {
 
 /// Settles which operands [`ConvKernel::Auto`] reads on `gpu` (see `conv_fast::calibrated`),
 /// whether it runs the heads' forward unpacked (`conv_nchw::wins`) and whether the texture
-/// packings copy their texels in (`conv_operands::copies_win`): the first call on a
+/// packings copy their texels in (`conv_operands::copy_min_texels`): the first call on a
 /// machine times both choices on small convs, later calls read the cached answers. Conv calls
 /// do this themselves; call it first to keep the cost out of a timed or counted step.
 pub fn calibrate(gpu: &Gpu) {
     conv_fast::calibrated(gpu);
     conv_nchw::wins(gpu, false);
     conv_nchw::wins(gpu, true);
-    super::conv_operands::copies_win(gpu);
+    super::conv_operands::copy_min_texels(gpu);
 }
 
 /// Whether the forward of `g` on `kernel` runs kernels that apply a PReLU (see

@@ -101,17 +101,19 @@ pub(super) fn pack_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry, 
     Ok(Packed::Texture(view, dim))
 }
 
-/// Whether packings into textures copy their texels in (`write_texels`): where that measured
-/// faster (`conv_operands::copies_win`: CPU adapters only), in a pass that can be split.
-fn copies_in(gpu: &Gpu, pass: &wgpu::ComputePass<'_>) -> bool {
-    gpu.can_split(pass) && super::conv_operands::copies_win(gpu)
+/// Whether a packing of `texels` texels copies them in (`write_texels`): where one that large
+/// measured faster (`conv_operands::copy_min_texels`: CPU adapters only), in a pass that can
+/// be split.
+fn copies_in(gpu: &Gpu, pass: &wgpu::ComputePass<'_>, texels: usize) -> bool {
+    gpu.can_split(pass) && texels >= super::conv_operands::copy_min_texels(gpu)
 }
 
 /// Records a packing into the rgba32f texture `view`: `staged` writing its texels into a
 /// staging buffer (in texel order, `staging_pitch` texels a row), which is then copied in,
-/// where that pays and can be done: a CPU adapter where copies measured faster (on an Intel
-/// Xeon a texture store costs ~3x a vec4 buffer store, see `gpu/passes.rs`), a pass that can
-/// be split, and the buffer within one storage binding. Else `stores`, writing the texture
+/// where that pays and can be done: a CPU adapter where copies of that many texels measured
+/// faster (on an Intel Xeon a texture store costs ~3x a vec4 buffer store, see
+/// `gpu/passes.rs`; each copy splits the pass, which costs the same for any size), a pass
+/// that can be split, and the buffer within one storage binding. Else `stores`, writing the texture
 /// with texture stores.
 pub(super) fn write_texels(
     gpu: &Gpu,
@@ -121,9 +123,10 @@ pub(super) fn write_texels(
     stores: impl FnOnce(&mut wgpu::ComputePass<'_>) -> Result<()>,
 ) -> Result<()> {
     let size = view.texture().size();
-    let floats = staging_pitch(size.width as usize) * (size.height * size.depth_or_array_layers) as usize * 4;
+    let rows = (size.height * size.depth_or_array_layers) as usize;
+    let floats = staging_pitch(size.width as usize) * rows * 4;
     let bytes = floats as u64 * 4;
-    if !copies_in(gpu, pass) || bytes > gpu.limits.max_storage_buffer_binding_size || bytes > gpu.limits.max_buffer_size {
+    if !copies_in(gpu, pass, size.width as usize * rows) || bytes > gpu.limits.max_storage_buffer_binding_size || bytes > gpu.limits.max_buffer_size {
         return stores(pass);
     }
     let staging = gpu.scratch(&[floats])?;
@@ -134,7 +137,7 @@ pub(super) fn write_texels(
 /// Whether [`stage_x`] copies `x` into its stage with no dispatch: rows of whole staging rows
 /// (width a multiple of 64), where the stage's texels are x's vec4s in order (the first layer on
 /// a 64^3 grid, the heads at 64 or 128 wide), on a CPU adapter in a pass that can be split.
-/// There this pays whatever `copies_win` says of packings, which store each texel either way:
+/// There this pays whatever `copy_min_texels` says of packings, which store each texel either way:
 /// the copy replaces a dispatch, its loads and its stores.
 pub(super) fn stage_copies(gpu: &Gpu, pass: &wgpu::ComputePass<'_>, g: &Geometry, x: &Tensor) -> bool {
     let iw = g.input[2];
