@@ -225,7 +225,7 @@ fn unpacked_heads_forward_reads_x_in_its_stage() {
 
 /// Only packings of at least the settled size are copied in (each copy splits the pass, at a
 /// cost that does not shrink with the texture): conv3d 32->32 3^3 on 1x8x8x16 packs its
-/// weights into 32 x 216 = 6912 texels (through windows: 110 KiB) and x into 16 x 8 x 64 = 8192.
+/// weights into 32 x 216 = 6912 texels (through windows: 108 KiB) and x into 16 x 8 x 64 = 8192.
 /// Settled at 0, 6913, 8192 and 8193 texels, a CPU adapter splits its forward pass 2, 1, 1, 0 times.
 #[test]
 fn only_packings_of_the_settled_size_are_copied_in() {

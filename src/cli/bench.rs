@@ -309,7 +309,7 @@ fn model_rows(gpu: &Gpu, repeat: usize, m: &Machine, profile: bool, only: Option
         json["dispatches"] = again.dispatches.into();
         json["first_run_dispatches"] = stats.dispatches.into();
         json["submits_per_step"] = stats.submits.into();
-        json["copies_per_step"] = copies.into();
+        json["copies"] = copies.into();
         json["pool_bytes"] = stats.pool_bytes.into();
         json["tensor_bytes"] = stats.tensor_bytes.into();
         json["scratch_bytes"] = stats.scratch_bytes.into();

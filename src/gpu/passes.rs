@@ -5,7 +5,9 @@
 //! `copy_buffer_to_texture` moved 2 MiB into an rgba32f texture in ~0.16 ms (README
 //! "Measured: Intel Xeon (family 6 model 167)"). So the texture family's packings write a
 //! buffer in texel order and copy it in ([`Gpu::copy_to_texture`]), which means ending the
-//! pass, copying and beginning the next one inside the same encoder and submit.
+//! pass, copying and beginning the next one inside the same encoder and submit; since that
+//! split costs the same for any size (~95 us on an AMD Zen 4), only packings from a size
+//! where copying measured faster do so (`ops::conv_operands::copy_min_texels`).
 //!
 //! Ops only see `&mut wgpu::ComputePass`, so [`Gpu::record_passes`] keeps the encoder of the
 //! pass it hands out (thread-local, a stack for recordings made inside recordings, e.g. a

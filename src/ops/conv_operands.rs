@@ -1,6 +1,6 @@
 //! Which family of tiled conv kernels a device runs: buffers or textures ([`Operands`]),
 //! chosen once per machine by timing both on a small conv ([`calibrated`]); and whether the
-//! texture family's packings copy their texels in ([`copy_min_texels`]).
+//! texture family's packings copy their texels in, by size ([`copy_min_texels`]).
 
 use super::conv::Geometry;
 use super::conv_fast::forward;
@@ -50,7 +50,7 @@ fn measure(gpu: &Gpu) -> Result<bool> {
 }
 
 thread_local! {
-    /// [`copy_min_texels`]'s answer while it measures (stores, then copies).
+    /// While `measure_copies` times a size: whether every packing copies (`true`) or none.
     static FORCED: Cell<Option<bool>> = const { Cell::new(None) };
 }
 
@@ -58,13 +58,13 @@ thread_local! {
 /// buffer and a copy (src/gpu/passes.rs) rather than texture stores (`usize::MAX`: none; never
 /// elsewhere, where texture stores are not the dear ones). A copy ends the compute pass and
 /// begins another, which costs the same whatever the size, and what that costs depends on the
-/// CPU: ~100 us on an AMD Zen 4 (the tiny training step's 51 copies: 14.5 against 9.7 ms with
+/// CPU: ~95 us on an AMD Zen 4 (the tiny training step's 51 copies: 14.5 against 9.7 ms with
 /// every kernel emptied), little on an Intel Xeon (family 6 model 167: 8192 texels copied in
 /// 0.10 ms, stored in 0.16), whose texture stores are dear (~130 ns per 8 lanes against ~40 for
 /// a vec4 buffer store; an AMD Zen 3: 142 and 117, `bench --operands`). So
-/// `RENDERNET_PACK_COPIES` (`copy`: every packing, `store`: none) if set, else the smaller of
-/// the two sizes [`COPY_SIZES`] at which copying packed a conv's input faster and to the same
-/// bits, none if neither (see `measure_copies`; measured once per machine and cached).
+/// `RENDERNET_PACK_COPIES` (`copy`: every packing, `store`: none) if set, else the smallest of
+/// [`COPY_SIZES`] down to which copying packed a conv's input faster, each size to the same
+/// bits (see `copy_threshold`; measured once per machine and cached).
 pub(crate) fn copy_min_texels(gpu: &Gpu) -> usize {
     let never = usize::MAX;
     if let Some(forced) = FORCED.with(Cell::get) {
@@ -77,29 +77,23 @@ pub(crate) fn copy_min_texels(gpu: &Gpu) -> usize {
     *gpu.pack_copies.get_or_init(|| match std::env::var("RENDERNET_PACK_COPIES").as_deref() {
         Ok("copy") => 0,
         Ok("store") => never,
-        _ => {
-            let wins = |name: &str, size: CopySize| gpu.calibrated_choice(name, || measure_copies(gpu, &size).unwrap_or(false));
-            copy_threshold(|| wins("conv-pack-copies", COPY_SIZES[1]), || wins("conv-pack-copies-small", COPY_SIZES[0]))
-        }
+        _ => copy_threshold(|size| gpu.calibrated_choice(size.name, || measure_copies(gpu, size).unwrap_or(false))),
     })
 }
 
-/// The fewest texels copied in, given whether copies won at `COPY_SIZES`' large size and, asked
-/// only where they did, at the small one.
-fn copy_threshold(large: impl FnOnce() -> bool, small: impl FnOnce() -> bool) -> usize {
-    if !large() {
-        usize::MAX
-    } else if small() {
-        COPY_SIZES[0].texels
-    } else {
-        COPY_SIZES[1].texels
-    }
+/// The texels of the smallest of [`COPY_SIZES`] down to which `wins` (timed from the largest
+/// size down, each smaller one only where the last won) says copies paid; `usize::MAX` if not
+/// even at the largest.
+fn copy_threshold(mut wins: impl FnMut(&CopySize) -> bool) -> usize {
+    COPY_SIZES.iter().take_while(|s| wins(s)).last().map_or(usize::MAX, |s| s.texels)
 }
 
-/// One of the two packings `copy_min_texels` times copied and stored: that of a 1x1 conv
-/// 16->4 on 16 x `ih` x 32, `texels` = 32 x `ih` x 16 * 16 / 4, run `runs` times a pass.
-#[derive(Clone, Copy)]
+/// One packing `copy_threshold` times copied and stored: that of a 1x1 conv 16->4 on 16 x `ih`
+/// x 32 (D x H x W), an x texture of 32 x `ih` x 64 texels (W, H, 16 depths x 4 channel quads),
+/// run `runs` times a pass.
 struct CopySize {
+    /// Its answer's name in the calibration cache.
+    name: &'static str,
     texels: usize,
     ih: usize,
     runs: usize,
@@ -107,17 +101,21 @@ struct CopySize {
     margin: f64,
 }
 
-/// `copy_min_texels`'s sizes, small then large. The small one runs 4 times as many convs, so
-/// that both take about as long, and copies must save 5% there: on an AMD Zen 4 the two timed
-/// within 1% of each other in 3 of 4 calibrations, the large one 4-12% apart, and at a tie the
-/// stores keep the pass whole (the whole training step was 18% faster with copies from 65536
-/// texels only, than with every packing copied).
-const COPY_SIZES: [CopySize; 2] =
-    [CopySize { texels: 16384, ih: 8, runs: 16, margin: 0.05 }, CopySize { texels: 65536, ih: 32, runs: 4, margin: 0.0 }];
+/// `copy_threshold`'s sizes, largest first. The smaller ones run more convs, so that each
+/// takes about as long, and copies must save 5% there: on an AMD Zen 4 the two ways timed
+/// within 1% of each other at 16384 texels in 3 of 4 calibrations (the large size 4-12% apart),
+/// and at a tie the stores keep the pass whole (the tiny training step was 18% faster copying
+/// from 65536 texels only than copying every packing).
+const COPY_SIZES: [CopySize; 3] = [
+    CopySize { name: "conv-pack-copies", texels: 65536, ih: 32, runs: 4, margin: 0.0 },
+    CopySize { name: "conv-pack-copies-16384", texels: 16384, ih: 8, runs: 16, margin: 0.05 },
+    CopySize { name: "conv-pack-copies-4096", texels: 4096, ih: 2, runs: 64, margin: 0.05 },
+];
 
-/// Whether `size`'s conv (its input packed through uniform windows; its small weights are
-/// stored either way) ran its runs in a pass faster by its margin with its packings copied in
-/// than stored, to the same bits.
+/// Whether `size`'s conv ran its runs in a pass faster by its margin with its packings copied
+/// in than stored, to the same bits. The large size packs its input through uniform windows,
+/// the smaller ones (planes under `conv_window`'s smallest chunk) with storage loads; the
+/// small weights are stored either way.
 fn measure_copies(gpu: &Gpu, size: &CopySize) -> Result<bool> {
     let g = Geometry { n: 1, ci: 16, co: 4, input: [16, size.ih, 32], output: [16, size.ih, 32], kernel: [1; 3], stride: [1; 3], pad: [0; 3], rank: 5 };
     // Textures, not `calibrated`: this may run inside that calibration (its texture kernels
@@ -128,7 +126,7 @@ fn measure_copies(gpu: &Gpu, size: &CopySize) -> Result<bool> {
     })
 }
 
-/// [`copy_min_texels`]'s answer while alive (cleared on drop, a panic included).
+/// Sets [`FORCED`] while alive (cleared on drop, a panic included).
 struct Forced;
 
 impl Forced {
@@ -178,7 +176,12 @@ fn second_wins_by(
             }
         }
     }
-    Ok(best[1] < best[0] * (1.0 - margin) && ys[0].to_vec(gpu)? == ys[1].to_vec(gpu)?)
+    Ok(faster_by(best, margin) && ys[0].to_vec(gpu)? == ys[1].to_vec(gpu)?)
+}
+
+/// Whether the second of two best times is below the first by at least `margin` of it.
+fn faster_by(best: [f64; 2], margin: f64) -> bool {
+    best[1] < best[0] * (1.0 - margin)
 }
 
 #[cfg(test)]
@@ -186,14 +189,31 @@ mod tests {
     use super::*;
 
     #[test]
-    fn copies_start_at_the_smallest_size_they_won_at_and_the_small_one_is_timed_only_after_the_large() {
-        let never = || panic!("the small size timed where the large one lost");
-        assert_eq!(copy_threshold(|| false, never), usize::MAX);
-        assert_eq!(copy_threshold(|| true, || false), 65536);
-        assert_eq!(copy_threshold(|| true, || true), 16384);
-        // The sizes' texels are what their convs' input packings write: 32 x H x (16 channels / 4).
-        for s in COPY_SIZES {
-            assert_eq!(s.texels, 32 * s.ih * 4 * 16);
+    fn copies_start_at_the_smallest_size_they_won_down_to() {
+        for (wins_from, want, timed) in [(usize::MAX, usize::MAX, 1), (65536, 65536, 2), (16384, 16384, 3), (4096, 4096, 3), (0, 4096, 3)] {
+            let mut asked = Vec::new();
+            let got = copy_threshold(|s| {
+                asked.push(s.name);
+                s.texels >= wins_from
+            });
+            assert_eq!(got, want, "copies winning from {wins_from} texels");
+            // Largest first, and a size only after every larger one won.
+            let names: Vec<_> = COPY_SIZES.iter().map(|s| s.name).take(timed).collect();
+            assert_eq!(asked, names, "copies winning from {wins_from} texels");
         }
+        // Each size's texels are what its conv's input packing writes.
+        for s in COPY_SIZES {
+            assert_eq!(s.texels, 32 * s.ih * 64, "{}", s.name);
+            // Named by size, but for the first, which keeps its name from before there were more.
+            assert!(s.name == "conv-pack-copies" || s.name.ends_with(&format!("-{}", s.texels)), "{}", s.name);
+        }
+    }
+
+    #[test]
+    fn a_margin_is_a_share_of_the_first_time() {
+        assert!(faster_by([1.0, 0.99], 0.0));
+        assert!(!faster_by([1.0, 1.0], 0.0));
+        assert!(!faster_by([1.0, 0.96], 0.05));
+        assert!(faster_by([1.0, 0.94], 0.05));
     }
 }
