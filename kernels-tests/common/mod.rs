@@ -19,8 +19,8 @@ pub fn gpu() -> &'static Gpu {
     GPU.get_or_init(|| {
         // SAFETY-free: set before any wgpu use so Mesa does not warn on a missing runtime dir.
         let gpu = Gpu::new().unwrap_or_else(|e| panic!("kernel tests need a GPU or lavapipe: {e}"));
-        // Packings copy their texels in whatever this machine's calibration would say, so the
-        // copies are what every texture test checks (`run_unsplit` checks the stores).
+        // Every packing copies its texels in, whatever its size and this machine's calibration,
+        // so the copies are what every texture test checks (`run_unsplit` checks the stores).
         gpu.settle_pack_copies(0);
         gpu
     })

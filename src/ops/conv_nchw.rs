@@ -130,7 +130,7 @@ fn measure(gpu: &Gpu, staged: bool) -> Result<bool> {
     let w = if staged { 64 } else { 60 };
     let g = Geometry { n: 1, ci: 16, co: 3, input: [1, 64, w], output: [1, 64, w], kernel: [1, 3, 3], stride: [1; 3], pad: [0, 1, 1], rank: 4 };
     // Without a bias: the path a transposed conv's input gradient takes.
-    super::conv_operands::second_wins(gpu, &g, |k, pass, x, w, y| {
+    super::conv_operands::second_wins(gpu, &g, 0.0, |k, pass, x, w, y| {
         if k == 0 { super::conv_fast::forward(gpu, pass, &g, x, w, None, y, ops) } else { forward(gpu, pass, &g, x, w, None, y) }
     })
 }

@@ -46,7 +46,7 @@ pub(crate) fn calibrated(gpu: &Gpu) -> Operands {
 fn measure(gpu: &Gpu) -> Result<bool> {
     let g = Geometry { n: 1, ci: 16, co: 16, input: [16; 3], output: [16; 3], kernel: [3; 3], stride: [1; 3], pad: [1; 3], rank: 5 };
     let ops = [Operands::Buffers, Operands::Textures];
-    second_wins(gpu, &g, |k, pass, x, w, y| forward(gpu, pass, &g, x, w, None, y, ops[k]))
+    second_wins(gpu, &g, 0.0, |k, pass, x, w, y| forward(gpu, pass, &g, x, w, None, y, ops[k]))
 }
 
 thread_local! {
@@ -120,7 +120,7 @@ fn measure_copies(gpu: &Gpu, size: &CopySize) -> Result<bool> {
     let g = Geometry { n: 1, ci: 16, co: 4, input: [16, size.ih, 32], output: [16, size.ih, 32], kernel: [1; 3], stride: [1; 3], pad: [0; 3], rank: 5 };
     // Textures, not `calibrated`: this may run inside that calibration (its texture kernels
     // pack), and only the texture family packs into textures.
-    second_wins_by(gpu, &g, size.margin, |k, pass, x, w, y| {
+    second_wins(gpu, &g, size.margin, |k, pass, x, w, y| {
         let _forced = Forced::new(k == 1);
         (0..size.runs).try_for_each(|_| forward(gpu, pass, &g, x, w, None, y, Operands::Textures))
     })
@@ -143,19 +143,10 @@ impl Drop for Forced {
 }
 
 /// Whether the second of two ways `run(k, pass, x, w, y)` (k = 0, 1) to compute the forward
-/// conv `g` ran faster than the first (best of 3 wall-clock runs each, after a first run that
-/// compiles the pipelines) and gave the same bits. The inputs are small integers times 1/8:
+/// conv `g` ran faster than the first by at least `margin` of the first's time (best of 3
+/// wall-clock runs each, after a first run that compiles the pipelines) and gave the same bits. The inputs are small integers times 1/8:
 /// every product and sum is exact in f32, so two correct kernels agree to the bit.
 pub(super) fn second_wins(
-    gpu: &Gpu,
-    g: &Geometry,
-    run: impl Fn(usize, &mut wgpu::ComputePass<'_>, &Tensor, &Tensor, &Tensor) -> Result<()>,
-) -> Result<bool> {
-    second_wins_by(gpu, g, 0.0, run)
-}
-
-/// [`second_wins`], the second having to take at most `1 - margin` of the first's time.
-fn second_wins_by(
     gpu: &Gpu,
     g: &Geometry,
     margin: f64,

@@ -113,8 +113,8 @@ fn copies_in(gpu: &Gpu, pass: &wgpu::ComputePass<'_>, texels: usize) -> bool {
 /// where that pays and can be done: a CPU adapter where copies of that many texels measured
 /// faster (on an Intel Xeon a texture store costs ~3x a vec4 buffer store, see
 /// `gpu/passes.rs`; each copy splits the pass, which costs the same for any size), a pass
-/// that can be split, and the buffer within one storage binding. Else `stores`, writing the texture
-/// with texture stores.
+/// that can be split, and the buffer within one storage binding. Else `stores`, writing the
+/// texture with texture stores.
 pub(super) fn write_texels(
     gpu: &Gpu,
     pass: &mut wgpu::ComputePass<'_>,
