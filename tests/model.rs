@@ -458,7 +458,10 @@ fn profiled_runs_time_every_op_in_schedule_order() {
     // Every dispatch of the step is counted against one op, and every op dispatches but the
     // heads' channel ranges, views of the joint head's output in the forward (16x16 planes),
     // and the heads' weights and biases, views of the parameters (graph/flat.rs) both ways.
-    assert_eq!(t.iter().map(|t| t.dispatches).sum::<u64>(), stats.dispatches, "{t:?}");
+    // Only the weight packings ahead of the step (one dispatch where the convs run on
+    // textures, ops/conv_pack_jobs.rs) are outside every op.
+    let outside = stats.dispatches - t.iter().map(|t| t.dispatches).sum::<u64>();
+    assert!(outside <= 1, "{outside} dispatches outside the ops: {t:?}");
     let view = |t: &&rendernet::graph::profile::OpTime| t.kind == "narrow" && t.name.ends_with(" forward") || t.kind == "concat_axis0";
     assert!(t.iter().filter(|t| !view(t)).all(|t| t.dispatches > 0), "{t:?}");
     assert!(t.iter().filter(view).all(|t| t.dispatches == 0), "{t:?}");
@@ -472,7 +475,7 @@ fn profiled_runs_time_every_op_in_schedule_order() {
     let total: f64 = t.iter().map(|t| t.ns).sum();
     let kinds = by_kind(t);
     assert_eq!(kinds.iter().map(|k| k.2).sum::<usize>(), t.len());
-    assert_eq!(kinds.iter().map(|k| k.3).sum::<u64>(), stats.dispatches);
+    assert_eq!(kinds.iter().map(|k| k.3).sum::<u64>() + outside, stats.dispatches);
     assert!((kinds.iter().map(|k| k.1).sum::<f64>() - total).abs() <= 1e-6 * total.max(1.0));
     assert!(kinds.windows(2).all(|w| w[0].1 >= w[1].1), "kinds not sorted slowest first");
     ex.profile(&gpu, false).unwrap();

@@ -7,6 +7,12 @@
 //! step), and a packing of a tensor in that buffer made at that version is reused with no
 //! dispatch. Other tensors never qualify: a computed value or an input may hold other
 //! contents at the same place next run.
+//!
+//! A kept texture packing that is stale (a training step's, or a run's after a parameter was
+//! fed) is not packed by its op either: the op defers it ([`Deferred`]), and the executor
+//! packs all of a run's deferred packings in one dispatch recorded ahead of the run
+//! (`ops/conv_pack_jobs.rs`), as the same submit's first command buffer. The parameters do
+//! not change before the run's optimizer update, its last command.
 
 use super::{Gpu, Tensor};
 use crate::error::Result;
@@ -17,6 +23,17 @@ use std::collections::HashMap;
 pub(crate) enum Packing {
     Texture(wgpu::TextureView),
     Buffer(Tensor),
+}
+
+/// A weight packing deferred to the run's prologue (`ops/conv_pack_jobs.rs`): its job (the
+/// packing's parameters with `total` its texels, then the offset of its weights in the
+/// parameter buffer and a slot for where its texels go in the staging buffer, all u32), the
+/// weights it reads (a view of the parameter buffer), and its texture and size in texels.
+pub(crate) struct Deferred {
+    pub(crate) job: Vec<u32>,
+    pub(crate) weights: Tensor,
+    pub(crate) view: wgpu::TextureView,
+    pub(crate) size: [u32; 2],
 }
 
 struct Entry {
@@ -35,6 +52,10 @@ pub(crate) struct Constants {
     entries: HashMap<Vec<u8>, Entry>,
     /// Keys packed by the run being recorded.
     pending: Vec<Vec<u8>>,
+    /// Packings deferred to this run's prologue.
+    deferred: Vec<Deferred>,
+    /// The prologue's job and staging buffers, kept from run to run (grown when too small).
+    pub(crate) batch: Option<(Tensor, Tensor)>,
     bytes: u64,
 }
 
@@ -43,11 +64,13 @@ impl Constants {
     pub(crate) fn begin_run(&mut self, params: Option<(wgpu::Buffer, u64)>) {
         self.params = params;
         self.pending.clear();
+        self.deferred.clear();
     }
 
     /// Marks the packings recorded by this run valid for its version when the run was
     /// submitted (`ok`); otherwise they hold nothing reliable and are packed again.
     pub(crate) fn end_run(&mut self, ok: bool) {
+        self.deferred.clear();
         let version = self.params.take().map(|p| p.1).filter(|_| ok);
         for k in self.pending.drain(..) {
             if let Some(e) = self.entries.get_mut(&k) {
@@ -56,9 +79,21 @@ impl Constants {
         }
     }
 
-    /// Bytes of the packings kept.
+    /// Bytes of the packings kept, and of the prologue's buffers.
     pub(crate) fn bytes(&self) -> u64 {
-        self.bytes
+        self.bytes + self.batch.as_ref().map_or(0, |(j, s)| (j.numel() + s.numel()) as u64 * 4)
+    }
+
+    /// Defers the packing into `d.view` to this run's prologue (once, however often asked).
+    pub(crate) fn defer(&mut self, d: Deferred) {
+        if !self.deferred.iter().any(|e| e.view == d.view) {
+            self.deferred.push(d);
+        }
+    }
+
+    /// The packings deferred so far, handed to the prologue.
+    pub(crate) fn take_deferred(&mut self) -> Vec<Deferred> {
+        std::mem::take(&mut self.deferred)
     }
 
     /// The packing of `w` by `key` (whatever else decides its layout), and whether it already

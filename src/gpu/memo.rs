@@ -16,7 +16,7 @@
 //! resources (wgpu's handles compare by identity, and the memo holds them, so an identity
 //! cannot be recycled while compared).
 
-use super::constant::{Constants, Packing};
+use super::constant::{Constants, Deferred, Packing};
 use super::kept::KeptOperands;
 use super::pool::Reuse;
 use super::{BufferPool, Gpu, Tensor};
@@ -258,6 +258,27 @@ impl Gpu {
     /// unchanged since a packing, and whether it is valid (see [`Constants::packing`]).
     pub(crate) fn constant_packing(&self, w: &Tensor, key: &[u8], bytes: u64, make: impl FnOnce() -> Result<Packing>) -> Result<Option<(Packing, bool)>> {
         ACTIVE.with(|a| a.borrow_mut().as_mut().map_or(Ok(None), |m| m.constants.packing(w, key, bytes, make)))
+    }
+
+    /// Inside a recording that keeps packings, defers `d` to the run's prologue (see
+    /// `constant.rs`) and returns true; else false (the caller packs it itself).
+    pub(crate) fn defer_packing(&self, d: Deferred) -> bool {
+        ACTIVE.with(|a| a.borrow_mut().as_mut().map(|m| m.constants.defer(d)).is_some())
+    }
+
+    /// The active recording's deferred packings and its kept prologue buffers (taken: hand
+    /// the buffers back with [`Gpu::keep_prologue_buffers`]).
+    pub(crate) fn take_deferred(&self) -> (Vec<Deferred>, Option<(Tensor, Tensor)>) {
+        ACTIVE.with(|a| a.borrow_mut().as_mut().map_or((Vec::new(), None), |m| (m.constants.take_deferred(), m.constants.batch.take())))
+    }
+
+    /// Hands the prologue's job and staging buffers back to the active recording.
+    pub(crate) fn keep_prologue_buffers(&self, b: Option<(Tensor, Tensor)>) {
+        ACTIVE.with(|a| {
+            if let Some(m) = a.borrow_mut().as_mut() {
+                m.constants.batch = b;
+            }
+        });
     }
 
     /// Writes the active recording's changed uniform blocks (called right before a submit).

@@ -16,7 +16,7 @@ pub use kernel::{Arg, Shader, grid_1d, MAX_WORKGROUPS_PER_DIM, SHADER_DIR_ENV};
 pub(crate) use kernel::wgsl;
 pub use memo::Memo;
 pub(crate) use passes::staging_pitch;
-pub(crate) use constant::Packing;
+pub(crate) use constant::{Deferred, Packing};
 pub(crate) use memo::op_done;
 pub use pool::BufferPool;
 pub use tensor::Tensor;
@@ -143,8 +143,13 @@ impl Gpu {
 
     /// Submits one encoder and blocks until the device has finished it.
     pub fn submit_and_wait(&self, enc: wgpu::CommandEncoder) -> Result<()> {
+        self.submit_after_and_wait(None, enc)
+    }
+
+    /// [`Gpu::submit_and_wait`] with `first` (a run's prologue) ahead of `enc` in the submit.
+    pub(crate) fn submit_after_and_wait(&self, first: Option<wgpu::CommandBuffer>, enc: wgpu::CommandEncoder) -> Result<()> {
         self.flush_memo();
-        let idx = self.queue.submit([enc.finish()]);
+        let idx = self.queue.submit(first.into_iter().chain([enc.finish()]));
         SUBMITS.with(|c| c.set(c.get() + 1));
         self.device
             .poll(wgpu::PollType::Wait { submission_index: Some(idx), timeout: None })

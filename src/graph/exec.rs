@@ -319,8 +319,9 @@ impl Executor {
         let (d0, s0, c0) = (gpu.dispatch_count(), gpu.submit_count(), gpu.created_count());
         self.pool.begin_run();
         let mut memo = std::mem::take(&mut self.memos[kind]);
-        // A training step changes the parameters: it neither reuses nor keeps weight packings.
-        let params = (adam.is_none()).then(|| (self.flat.params_buffer().clone(), self.param_version.get()));
+        // A training step changes the parameters only in its last command (Adam): its packings
+        // hold for the run and are stale for the next, whose prologue packs them again.
+        let params = Some((self.flat.params_buffer().clone(), self.param_version.get()));
         memo.begin_constants(params);
         let tensor_bytes = if self.reuse {
             gpu.recording(&mut memo, || self.record_and_submit(gpu, &nodes, &bw, loss, adam, &last, &last_grad, &fusions))
@@ -391,7 +392,9 @@ impl Executor {
             let l = self.values[l.0].as_ref().expect("the loss is kept");
             enc.copy_buffer_to_buffer(l.buffer(), 0, staging, fb, 4);
         }
-        gpu.submit_and_wait(enc)?;
+        // The weight packings this run's convs deferred, packed ahead of it.
+        let prologue = ops::conv_pack_jobs::prologue(gpu)?;
+        gpu.submit_after_and_wait(prologue, enc)?;
         Ok(tensor_bytes)
     }
 

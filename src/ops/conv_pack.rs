@@ -6,7 +6,7 @@
 
 use super::conv::{Geometry, Params};
 use super::conv_fast::{Folded, TEX_SHADER, dispatch, volume, x_texture_fits};
-use super::conv_window;
+use super::{conv_pack_jobs, conv_window};
 use crate::error::Result;
 use crate::gpu::{Arg, Gpu, Packing, Tensor, staging_pitch};
 
@@ -193,6 +193,7 @@ pub(super) fn pack_w(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: 
     let kept = gpu.constant_packing(w, &key, (width * height * 16) as u64, || {
         Ok(if tex { Packing::Texture(gpu.new_rgba32f_texture(size, dim)) } else { Packing::Buffer(Tensor::zeros(gpu, &[taps, p.cpad as usize, width])?) })
     })?;
+    let kept_texture = matches!(kept, Some((Packing::Texture(_), _)));
     let (out, valid) = match kept {
         Some((Packing::Texture(v), valid)) => (Packed::Texture(v, wgpu::TextureViewDimension::D2), valid),
         Some((Packing::Buffer(t), valid)) => (Packed::Buffer(t), valid),
@@ -203,6 +204,8 @@ pub(super) fn pack_w(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: 
         return Ok(out);
     }
     match &out {
+        // A kept texture is packed with the run's others in one dispatch ahead of it.
+        Packed::Texture(view, _) if kept_texture && conv_pack_jobs::defer(gpu, p, w, view, [width, height]) => {}
         Packed::Buffer(t) => pack_weights(gpu, pass, p, w, t)?,
         Packed::Texture(view, d) => {
             if !conv_window::pack_w(gpu, pass, p, w, view, *d, width * height)? {

@@ -17,6 +17,7 @@ mod conv_fast_weight;
 mod conv_nchw;
 mod conv_operands;
 mod conv_pack;
+pub(crate) mod conv_pack_jobs;
 mod conv_window;
 pub mod dropout;
 pub mod elu;
