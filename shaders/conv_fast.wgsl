@@ -164,22 +164,17 @@ fn conv_fast_pack_folded(@builtin(global_invocation_id) gid: vec3<u32>, @builtin
 // Source index of the packed weight of dispatch tap `tap`, input channel `c`, output channel
 // `o`, or -1 where it is zero (past the real channel counts or the source kernel's edge).
 fn weight_index(tap: u32, c: u32, o: u32) -> i32 {
-    return weight_index_in(p, tap, c, o);
-}
-
-// weight_index for the packing parameters `q` (one job of conv_fast_pack_weights_jobs).
-fn weight_index_in(q: Params, tap: u32, c: u32, o: u32) -> i32 {
-    let taps = q.kd * q.kh * q.kw;
-    if (o >= q.co || c >= q.ci) { return -1; }
-    if (q.flip == 0u) {
-        let f = max(q.fold, 1u);
-        return i32((o * (q.ci / f) + c / f) * taps * f + tap * f + c % f);
+    let taps = p.kd * p.kh * p.kw;
+    if (o >= p.co || c >= p.ci) { return -1; }
+    if (p.flip == 0u) {
+        let f = max(p.fold, 1u);
+        return i32((o * (p.ci / f) + c / f) * taps * f + tap * f + c % f);
     }
-    let kd = q.pd + (q.kd - 1u - tap / (q.kh * q.kw)) * q.sd;
-    let kh = q.ph + (q.kh - 1u - (tap / q.kw) % q.kh) * q.sh;
-    let kw = q.pw + (q.kw - 1u - tap % q.kw) * q.sw;
-    if (kd < q.id && kh < q.ih && kw < q.iw) {
-        return i32((c * q.co + o) * q.id * q.ih * q.iw + (kd * q.ih + kh) * q.iw + kw);
+    let kd = p.pd + (p.kd - 1u - tap / (p.kh * p.kw)) * p.sd;
+    let kh = p.ph + (p.kh - 1u - (tap / p.kw) % p.kh) * p.sh;
+    let kw = p.pw + (p.kw - 1u - tap % p.kw) * p.sw;
+    if (kd < p.id && kh < p.ih && kw < p.iw) {
+        return i32((c * p.co + o) * p.id * p.ih * p.iw + (kd * p.ih + kh) * p.iw + kw);
     }
     return -1;
 }

@@ -186,15 +186,11 @@ fn conv_fast_pack_tex_window_buf(@builtin(global_invocation_id) gid: vec3<u32>) 
 struct WeightTexel { at: vec2<u32>, tap: u32, c: u32, o: u32 }
 
 fn weight_texel(i: u32) -> WeightTexel {
-    return weight_texel_in(p, i);
-}
-
-fn weight_texel_in(k: Params, i: u32) -> WeightTexel {
-    let width = k.co16 * 16u;
+    let width = p.co16 * 16u;
     let x = i % width;
     let y = i / width;
-    let q = y % (k.cpad / 4u);
-    return WeightTexel(vec2<u32>(x, y), y / (k.cpad / 4u), 4u * q + (x % 16u) / 4u, (x / 16u) * 16u + (x % 4u) * 4u);
+    let q = y % (p.cpad / 4u);
+    return WeightTexel(vec2<u32>(x, y), y / (p.cpad / 4u), 4u * q + (x % 16u) / 4u, (x / 16u) * 16u + (x % 4u) * 4u);
 }
 
 @compute @workgroup_size(64)
@@ -244,26 +240,29 @@ fn conv_fast_pack_weights_tex_window_buf(@builtin(global_invocation_id) gid: vec
 }
 
 // Every weight packing a recorded run needs, in one dispatch before the run (src/ops/
-// conv_pack_jobs.rs): job y (workgroup row y) is one packing's parameters `q` (total = its
-// texels), the offset `woff` of its weights in `jsrc` (the parameters' one buffer) and the
-// texel `at` of the staging buffer `jdst` where its texels go in texel order; the run then
-// copies each job's texels into its texture. One dispatch in place of one a conv and pass:
-// on lavapipe a dispatch costs ~40-90 us whatever it does.
-struct WeightJob { q: Params, woff: u32, at: u32 }
-@group(0) @binding(1) var<storage, read> jobs: array<WeightJob>;
-@group(0) @binding(2) var<storage, read> jsrc: array<f32>;
+// conv_pack_jobs.rs): staging texel i (p.total of them, the packings' texels one packing
+// after another) gathers the four parameters whose indices texel i of `jmap` holds (as f32;
+// negative: zero) from `jsrc`, the parameters copied into a texture; the run then copies each
+// packing's texels into its texture. Params: total. Both textures are JOB_TEX_W texels wide.
+// Per-lane texel loads: on lavapipe a tenth of a storage-buffer load's cost.
+const JOB_TEX_W: u32 = 4096u;
+@group(0) @binding(1) var jmap: texture_storage_2d<rgba32float, read>;
+@group(0) @binding(2) var jsrc: texture_storage_2d<rgba32float, read>;
 @group(0) @binding(3) var<storage, read_write> jdst: array<vec4<f32>>;
 
-fn job_weight(j: WeightJob, tap: u32, c: u32, o: u32) -> f32 {
-    let i = weight_index_in(j.q, tap, c, o);
-    return select(0.0, jsrc[j.woff + u32(max(i, 0))], i >= 0);
+fn job_param(f: f32) -> f32 {
+    let s = u32(max(f, 0.0));
+    let t = textureLoad(jsrc, vec2<i32>(i32((s / 4u) % JOB_TEX_W), i32(s / 4u / JOB_TEX_W)));
+    // Written out: a lane-varying t[s % 4] would live in memory on llvmpipe.
+    let k = s % 4u;
+    let v = select(select(t.x, t.y, k == 1u), select(t.z, t.w, k == 3u), k >= 2u);
+    return select(0.0, v, f >= 0.0);
 }
 
 @compute @workgroup_size(64)
-fn conv_fast_pack_weights_jobs(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(workgroup_id) wid: vec3<u32>) {
-    let j = jobs[wid.y];
-    if (gid.x >= j.q.total) { return; }
-    let t = weight_texel_in(j.q, gid.x);
-    jdst[j.at + gid.x] = vec4<f32>(job_weight(j, t.tap, t.c, t.o), job_weight(j, t.tap, t.c, t.o + 1u),
-                                   job_weight(j, t.tap, t.c, t.o + 2u), job_weight(j, t.tap, t.c, t.o + 3u));
+fn conv_fast_pack_weights_jobs(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let i = lin(gid, nwg);
+    if (i >= p.total) { return; }
+    let m = textureLoad(jmap, vec2<i32>(i32(i % JOB_TEX_W), i32(i / JOB_TEX_W)));
+    jdst[i] = vec4<f32>(job_param(m.x), job_param(m.y), job_param(m.z), job_param(m.w));
 }

@@ -27,13 +27,24 @@ pub(crate) enum Packing {
 
 /// A weight packing deferred to the run's prologue (`ops/conv_pack_jobs.rs`): its job (the
 /// packing's parameters with `total` its texels, then the offset of its weights in the
-/// parameter buffer and a slot for where its texels go in the staging buffer, all u32), the
-/// weights it reads (a view of the parameter buffer), and its texture and size in texels.
+/// parameter buffer, in u32 words), the weights it reads (a view of the parameter buffer),
+/// and its texture and size in texels.
 pub(crate) struct Deferred {
     pub(crate) job: Vec<u32>,
     pub(crate) weights: Tensor,
     pub(crate) view: wgpu::TextureView,
     pub(crate) size: [u32; 2],
+}
+
+/// What the prologue keeps from run to run (`ops/conv_pack_jobs.rs`): the jobs it was made
+/// for, the staging buffer its texels go to, the map of each packed float's parameter index,
+/// and the texture the parameters are copied into, with its size.
+pub(crate) struct PrologueBuffers {
+    pub(crate) jobs: Vec<u32>,
+    pub(crate) staging: Tensor,
+    pub(crate) map: wgpu::TextureView,
+    pub(crate) src: wgpu::TextureView,
+    pub(crate) src_size: [usize; 3],
 }
 
 struct Entry {
@@ -54,8 +65,8 @@ pub(crate) struct Constants {
     pending: Vec<Vec<u8>>,
     /// Packings deferred to this run's prologue.
     deferred: Vec<Deferred>,
-    /// The prologue's job and staging buffers, kept from run to run (grown when too small).
-    pub(crate) batch: Option<(Tensor, Tensor)>,
+    /// The prologue's buffers, kept from run to run (made anew when too small).
+    pub(crate) batch: Option<PrologueBuffers>,
     bytes: u64,
 }
 
@@ -81,7 +92,12 @@ impl Constants {
 
     /// Bytes of the packings kept, and of the prologue's buffers.
     pub(crate) fn bytes(&self) -> u64 {
-        self.bytes + self.batch.as_ref().map_or(0, |(j, s)| (j.numel() + s.numel()) as u64 * 4)
+        let prologue = |b: &PrologueBuffers| {
+            // The map holds the staging buffer's texels in whole rows as wide as the source's.
+            let row = b.src_size[0];
+            b.staging.numel() + 4 * ((b.staging.numel() / 4).div_ceil(row) * row + row * b.src_size[1])
+        };
+        self.bytes + self.batch.as_ref().map_or(0, prologue) as u64 * 4
     }
 
     /// Defers the packing into `d.view` to this run's prologue (once, however often asked).

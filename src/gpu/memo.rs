@@ -16,7 +16,7 @@
 //! resources (wgpu's handles compare by identity, and the memo holds them, so an identity
 //! cannot be recycled while compared).
 
-use super::constant::{Constants, Deferred, Packing};
+use super::constant::{Constants, Deferred, Packing, PrologueBuffers};
 use super::kept::KeptOperands;
 use super::pool::Reuse;
 use super::{BufferPool, Gpu, Tensor};
@@ -268,12 +268,12 @@ impl Gpu {
 
     /// The active recording's deferred packings and its kept prologue buffers (taken: hand
     /// the buffers back with [`Gpu::keep_prologue_buffers`]).
-    pub(crate) fn take_deferred(&self) -> (Vec<Deferred>, Option<(Tensor, Tensor)>) {
+    pub(crate) fn take_deferred(&self) -> (Vec<Deferred>, Option<PrologueBuffers>) {
         ACTIVE.with(|a| a.borrow_mut().as_mut().map_or((Vec::new(), None), |m| (m.constants.take_deferred(), m.constants.batch.take())))
     }
 
-    /// Hands the prologue's job and staging buffers back to the active recording.
-    pub(crate) fn keep_prologue_buffers(&self, b: Option<(Tensor, Tensor)>) {
+    /// Hands the prologue's buffers back to the active recording.
+    pub(crate) fn keep_prologue_buffers(&self, b: Option<PrologueBuffers>) {
         ACTIVE.with(|a| {
             if let Some(m) = a.borrow_mut().as_mut() {
                 m.constants.batch = b;

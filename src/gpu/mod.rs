@@ -16,7 +16,7 @@ pub use kernel::{Arg, Shader, grid_1d, MAX_WORKGROUPS_PER_DIM, SHADER_DIR_ENV};
 pub(crate) use kernel::wgsl;
 pub use memo::Memo;
 pub(crate) use passes::staging_pitch;
-pub(crate) use constant::{Deferred, Packing};
+pub(crate) use constant::{Deferred, Packing, PrologueBuffers};
 pub(crate) use memo::op_done;
 pub use pool::BufferPool;
 pub use tensor::Tensor;
