@@ -425,6 +425,29 @@ fn frozen_weights_are_packed_once_and_again_after_every_change() {
 }
 
 #[test]
+fn a_run_needing_more_weight_packings_than_the_last_packs_them_all() {
+    // A frozen backward that wants no gradient runs no backward op, so it packs only the
+    // convs' forward weights; asking for x's gradient adds c2's packing for its input
+    // gradient, and the one dispatch that packs a run's stale weights ahead of it
+    // (ops/conv_pack_jobs.rs) is remade for the larger set.
+    let n = conv_net(false);
+    let mut ex = Executor::new(gpu(), n.graph.clone(), 12).unwrap();
+    ex.feed(gpu(), n.x, &f32v(&Rng(12).vec(9 * 10 * 11, -1.0, 1.0))).unwrap();
+    ex.keep(n.y);
+    ex.freeze_params();
+    ex.backward(gpu(), n.loss).unwrap();
+    ex.want_grad(n.x);
+    let w2: Vec<f32> = ex.read(gpu(), n.w2).unwrap().iter().map(|v| -0.5 * v).collect();
+    ex.feed(gpu(), n.w2, &w2).unwrap();
+    ex.backward(gpu(), n.loss).unwrap();
+    let mut plain = fresh_copy(&n, &ex);
+    plain.reuse_gpu_objects(false);
+    plain.freeze_params();
+    plain.backward(gpu(), n.loss).unwrap();
+    assert_eq!(ex.grad(gpu(), n.x).unwrap(), plain.grad(gpu(), n.x).unwrap(), "against a run that keeps nothing");
+}
+
+#[test]
 fn a_frozen_backward_reuses_its_packings_and_weights_that_are_inputs_never_do() {
     // Inverse rendering's runs: backward through frozen parameters to an input, repeated.
     let n = conv_net(false);
@@ -434,9 +457,12 @@ fn a_frozen_backward_reuses_its_packings_and_weights_that_are_inputs_never_do() 
     let dx = ex.grad(gpu(), n.x).unwrap();
     let again = ex.backward(gpu(), n.loss).unwrap();
     // Forward and backward-input packings kept: one dispatch ahead of the first run packed
-    // them all where the convs run on textures, one each elsewhere.
-    let packings = if first_conv_on_textures() { 1 } else { 4 };
-    assert!(again.dispatches + packings <= first.dispatches, "first {first:?}, again {again:?}");
+    // them all where the convs run on textures, one each (at least 3) elsewhere.
+    if first_conv_on_textures() {
+        assert_eq!(again.dispatches + 1, first.dispatches, "first {first:?}, again {again:?}");
+    } else {
+        assert!(again.dispatches + 2 < first.dispatches, "first {first:?}, again {again:?}");
+    }
     assert_eq!(ex.grad(gpu(), n.x).unwrap(), dx);
     let mut plain = fresh_copy(&n, &ex);
     plain.reuse_gpu_objects(false);

@@ -460,8 +460,8 @@ fn profiled_runs_time_every_op_in_schedule_order() {
     // and the heads' weights and biases, views of the parameters (graph/flat.rs) both ways.
     // Only the weight packings ahead of the step (one dispatch where the convs run on
     // textures, ops/conv_pack_jobs.rs) are outside every op.
-    let outside = stats.dispatches - t.iter().map(|t| t.dispatches).sum::<u64>();
-    assert!(outside <= 1, "{outside} dispatches outside the ops: {t:?}");
+    let outside = stats.dispatches.checked_sub(t.iter().map(|t| t.dispatches).sum::<u64>()).expect("more dispatches counted against ops than made");
+    assert_eq!(outside, u64::from(on_textures(&gpu)), "dispatches outside the ops: {t:?}");
     let view = |t: &&rendernet::graph::profile::OpTime| t.kind == "narrow" && t.name.ends_with(" forward") || t.kind == "concat_axis0";
     assert!(t.iter().filter(|t| !view(t)).all(|t| t.dispatches > 0), "{t:?}");
     assert!(t.iter().filter(view).all(|t| t.dispatches == 0), "{t:?}");
@@ -481,6 +481,13 @@ fn profiled_runs_time_every_op_in_schedule_order() {
     ex.profile(&gpu, false).unwrap();
     ex.forward(&gpu).unwrap();
     assert!(ex.op_times().is_empty());
+}
+
+/// Whether the convs run on the texture kernels here (a CPU adapter where they measured
+/// faster), as the first layer's shape shows.
+fn on_textures(gpu: &Gpu) -> bool {
+    use rendernet::ops::conv::{Conv, ConvKernel, Padding};
+    Conv::conv3d([5, 5, 5], [2, 2, 2], Padding::Same).fuses_prelu(ConvKernel::Auto, gpu, &[1, 1, 9, 10, 11], &[8, 1, 5, 5, 5]).unwrap()
 }
 
 /// The EC baselines: whole 128 px frames from a 32^3 grid, pose and light; a camera-grid

@@ -65,7 +65,7 @@ pub(crate) struct Constants {
     pending: Vec<Vec<u8>>,
     /// Packings deferred to this run's prologue.
     deferred: Vec<Deferred>,
-    /// The prologue's buffers, kept from run to run (made anew when too small).
+    /// The prologue's buffers, kept from run to run (made anew when the packings change).
     pub(crate) batch: Option<PrologueBuffers>,
     bytes: u64,
 }
@@ -100,11 +100,18 @@ impl Constants {
         self.bytes + self.batch.as_ref().map_or(0, prologue) as u64 * 4
     }
 
-    /// Defers the packing into `d.view` to this run's prologue (once, however often asked).
-    pub(crate) fn defer(&mut self, d: Deferred) {
-        if !self.deferred.iter().any(|e| e.view == d.view) {
-            self.deferred.push(d);
+    /// Defers the packing into `d.view` to this run's prologue (once, however often asked);
+    /// false if the run's deferred packings would then hold more than `max_texels` texels.
+    pub(crate) fn defer(&mut self, d: Deferred, max_texels: usize) -> bool {
+        if self.deferred.iter().any(|e| e.view == d.view) {
+            return true;
         }
+        let texels = |d: &Deferred| d.size[0] as usize * d.size[1] as usize;
+        if self.deferred.iter().map(texels).sum::<usize>() + texels(&d) > max_texels {
+            return false;
+        }
+        self.deferred.push(d);
+        true
     }
 
     /// The packings deferred so far, handed to the prologue.

@@ -91,8 +91,9 @@ impl Memo {
     }
 
     /// Before a run: `params` is the buffer holding the graph's parameters and the version of
-    /// its contents, whose packings this run may reuse and keep (`None`: a run that changes
-    /// them, which neither reuses nor keeps any).
+    /// its contents, whose packings this run may reuse and keep (`None`: none; the executor
+    /// passes its parameters for every run, a training step's too, since Adam changes them
+    /// only in the run's last command).
     pub fn begin_constants(&mut self, params: Option<(wgpu::Buffer, u64)>) {
         self.constants.begin_run(params);
     }
@@ -261,9 +262,10 @@ impl Gpu {
     }
 
     /// Inside a recording that keeps packings, defers `d` to the run's prologue (see
-    /// `constant.rs`) and returns true; else false (the caller packs it itself).
-    pub(crate) fn defer_packing(&self, d: Deferred) -> bool {
-        ACTIVE.with(|a| a.borrow_mut().as_mut().map(|m| m.constants.defer(d)).is_some())
+    /// `constant.rs`) and returns true, unless the run's deferred packings would then hold
+    /// more than `max_texels` texels; else false (the caller packs it itself).
+    pub(crate) fn defer_packing(&self, d: Deferred, max_texels: usize) -> bool {
+        ACTIVE.with(|a| a.borrow_mut().as_mut().is_some_and(|m| m.constants.defer(d, max_texels)))
     }
 
     /// The active recording's deferred packings and its kept prologue buffers (taken: hand

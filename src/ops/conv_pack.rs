@@ -182,7 +182,8 @@ pub(super) fn stage_x(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geometry,
 
 /// Weights packed for the packing parameters `p` (see `pack_weights`), as a texture or buffer.
 /// A parameter's packing is kept from the last run of its graph while the parameters are
-/// unchanged, and then not recorded again (`gpu/constant.rs`).
+/// unchanged, and then not recorded again (`gpu/constant.rs`); a kept texture that is stale
+/// is packed ahead of the run with the run's others, in one dispatch (`conv_pack_jobs`).
 pub(super) fn pack_w(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, p: Params, w: &Tensor, tex: bool) -> Result<Packed> {
     let taps = (p.kd * p.kh * p.kw) as usize;
     let (width, height) = (p.co16 as usize * 16, taps * p.cpad as usize / 4);

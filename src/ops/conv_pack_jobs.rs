@@ -27,16 +27,20 @@ const TEX_WIDTH: usize = 4096;
 const MAX_INDEX: usize = 1 << 24;
 
 /// Defers packing `w` for the parameters `p` into `view` (`width` x `height` texels, the
-/// weight texture's layout) to the run's prologue; false outside a run that keeps packings or
-/// where the parameters are too many for the map's f32 indices.
+/// weight texture's layout) to the run's prologue; false outside a run that keeps packings,
+/// where the parameters are too many for the map's f32 indices or the device's textures, or
+/// where the run's packings would outgrow one staging binding or the map texture.
 pub(super) fn defer(gpu: &Gpu, mut p: Params, w: &Tensor, view: &wgpu::TextureView, [width, height]: [usize; 2]) -> bool {
-    if w.buffer().size() / 4 > MAX_INDEX as u64 {
+    let rows = gpu.limits.max_texture_dimension_2d as usize;
+    let params = (w.buffer().size() / 4) as usize;
+    if params > MAX_INDEX || TEX_WIDTH > rows || (params / 4).div_ceil(TEX_WIDTH) > rows {
         return false;
     }
+    let max_texels = (TEX_WIDTH * rows).min(gpu.limits.max_storage_buffer_binding_size as usize / 16);
     p.total = (width * height) as u32;
     let mut job: Vec<u32> = bytemuck::cast_slice(bytemuck::bytes_of(&p)).to_vec();
     job.push((w.offset() / 4) as u32);
-    gpu.defer_packing(Deferred { job, weights: w.clone(), view: view.clone(), size: [width as u32, height as u32] })
+    gpu.defer_packing(Deferred { job, weights: w.clone(), view: view.clone(), size: [width as u32, height as u32] }, max_texels)
 }
 
 /// Size of a texture holding `texels` texels, `TEX_WIDTH` a row.
