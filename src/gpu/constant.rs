@@ -27,11 +27,9 @@ pub(crate) enum Packing {
 
 /// A weight packing deferred to the run's prologue (`ops/conv_pack_jobs.rs`): its job (the
 /// packing's parameters with `total` its texels, then the offset of its weights in the
-/// parameter buffer, in u32 words), the weights it reads (a view of the parameter buffer),
-/// and its texture and size in texels.
+/// run's parameter buffer, in u32 words), and its texture and size in texels.
 pub(crate) struct Deferred {
     pub(crate) job: Vec<u32>,
-    pub(crate) weights: Tensor,
     pub(crate) view: wgpu::TextureView,
     pub(crate) size: [u32; 2],
 }
@@ -114,9 +112,12 @@ impl Constants {
         true
     }
 
-    /// The packings deferred so far, handed to the prologue.
-    pub(crate) fn take_deferred(&mut self) -> Vec<Deferred> {
-        std::mem::take(&mut self.deferred)
+    /// The packings deferred so far, handed to the prologue with the buffer of the
+    /// parameters they read (`None` with none deferred).
+    pub(crate) fn take_deferred(&mut self) -> Option<(Vec<Deferred>, wgpu::Buffer)> {
+        let jobs = std::mem::take(&mut self.deferred);
+        let params = self.params.as_ref().map(|p| p.0.clone());
+        params.filter(|_| !jobs.is_empty()).map(|b| (jobs, b))
     }
 
     /// The packing of `w` by `key` (whatever else decides its layout), and whether it already

@@ -268,10 +268,11 @@ impl Gpu {
         ACTIVE.with(|a| a.borrow_mut().as_mut().is_some_and(|m| m.constants.defer(d, max_texels)))
     }
 
-    /// The active recording's deferred packings and its kept prologue buffers (taken: hand
-    /// the buffers back with [`Gpu::keep_prologue_buffers`]).
-    pub(crate) fn take_deferred(&self) -> (Vec<Deferred>, Option<PrologueBuffers>) {
-        ACTIVE.with(|a| a.borrow_mut().as_mut().map_or((Vec::new(), None), |m| (m.constants.take_deferred(), m.constants.batch.take())))
+    /// The active recording's deferred packings with the parameter buffer they read (`None`
+    /// with none), and its kept prologue buffers (taken: hand them back with
+    /// [`Gpu::keep_prologue_buffers`]).
+    pub(crate) fn take_deferred(&self) -> (Option<(Vec<Deferred>, wgpu::Buffer)>, Option<PrologueBuffers>) {
+        ACTIVE.with(|a| a.borrow_mut().as_mut().map_or((None, None), |m| (m.constants.take_deferred(), m.constants.batch.take())))
     }
 
     /// Hands the prologue's buffers back to the active recording.

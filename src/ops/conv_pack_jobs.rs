@@ -40,7 +40,7 @@ pub(super) fn defer(gpu: &Gpu, mut p: Params, w: &Tensor, view: &wgpu::TextureVi
     p.total = (width * height) as u32;
     let mut job: Vec<u32> = bytemuck::cast_slice(bytemuck::bytes_of(&p)).to_vec();
     job.push((w.offset() / 4) as u32);
-    gpu.defer_packing(Deferred { job, weights: w.clone(), view: view.clone(), size: [width as u32, height as u32] }, max_texels)
+    gpu.defer_packing(Deferred { job, view: view.clone(), size: [width as u32, height as u32] }, max_texels)
 }
 
 /// Size of a texture holding `texels` texels, `TEX_WIDTH` a row.
@@ -51,14 +51,13 @@ fn tex_size(texels: usize) -> [usize; 3] {
 /// Records the active recording's deferred packings (see the module note) into a command
 /// buffer to submit ahead of the run, or `None` if it deferred none.
 pub(crate) fn prologue(gpu: &Gpu) -> Result<Option<wgpu::CommandBuffer>> {
-    let (jobs, kept) = gpu.take_deferred();
-    let Some(first) = jobs.first() else {
+    let (deferred, kept) = gpu.take_deferred();
+    let Some((jobs, params)) = deferred else {
         gpu.keep_prologue_buffers(kept);
         return Ok(None);
     };
     let words: Vec<u32> = jobs.iter().flat_map(|d| d.job.iter().copied()).collect();
     let total: usize = jobs.iter().map(|d| (d.size[0] * d.size[1]) as usize).sum();
-    let params = first.weights.buffer();
     let src_size = tex_size((params.size() / 16) as usize);
     let batch = match kept {
         Some(b) if b.jobs == words && b.src_size == src_size => b,
@@ -78,7 +77,7 @@ pub(crate) fn prologue(gpu: &Gpu) -> Result<Option<wgpu::CommandBuffer>> {
         }
     };
     let mut enc = gpu.device.create_command_encoder(&Default::default());
-    copy_params(&mut enc, params, &batch.src, src_size);
+    copy_params(&mut enc, &params, &batch.src, src_size);
     {
         let mut pass = enc.begin_compute_pass(&Default::default());
         let p = Params { total: total as u32, ..Default::default() };
