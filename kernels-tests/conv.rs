@@ -23,6 +23,8 @@ use rendernet::ops::conv_transpose::ConvTranspose;
 
 #[path = "conv/tiled.rs"]
 mod tiled;
+#[path = "conv/cols4.rs"]
+mod cols4;
 
 const ATOL: f64 = 1e-4;
 const RTOL: f64 = 1e-4;

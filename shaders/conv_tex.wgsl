@@ -423,3 +423,109 @@ fn forward_tex4_rows3(ids: LaneIds, act: bool) {
     }
     put_tile4(ft, a, act);
 }
+
+// ---- forward, 4 columns a lane: 8 lanes = 32 outputs along W; each lane 2 rows x 4 columns x 16 channels
+// For 3 W taps at column stride 1 (src/ops/conv_fast.rs says when). One loop step per (kd, kh,
+// quad) does all 3 W taps: each accumulator gets 12 FMAs a step where the tile above gives it
+// 4 (lavapipe copies every loop-carried value through the lane mask each step, ~2.5 FMAs at
+// the ceiling), a lane's 4 columns x 3 taps read 6 x texels a row instead of 12, and each
+// channel's 4 columns are one vec4 store (a store is a loop over the lanes either way:
+// `rendernet bench --operands`). The output bound as vec4s: ow, ycs, ysd, ysh, yoff are
+// multiples of 4 and ysw is 1 (the caller checks).
+@group(0) @binding(4) var<storage, read_write> fy4: array<vec4<f32>>;
+
+struct Cols4 { c0: Acc, c1: Acc, c2: Acc, c3: Acc }
+struct TileW4 { r0: Cols4, r1: Cols4, r2: Cols4, r3: Cols4 }
+// A lane's 6 x texels of one row: columns ow - pw .. ow - pw + 5.
+struct X6 { x0: vec4<f32>, x1: vec4<f32>, x2: vec4<f32>, x3: vec4<f32>, x4: vec4<f32>, x5: vec4<f32> }
+
+fn x6(n: u32, q: u32, zd: u32, zh: i32, zw: i32) -> X6 {
+    return X6(tex_x(n, q, zd, zh, zw), tex_x(n, q, zd, zh, zw + 1), tex_x(n, q, zd, zh, zw + 2),
+              tex_x(n, q, zd, zh, zw + 3), tex_x(n, q, zd, zh, zw + 4), tex_x(n, q, zd, zh, zw + 5));
+}
+
+// One column's 16 channels through the 3 W taps (x0..x2 the texels they reach).
+fn mac_w3(a: Acc, x0: vec4<f32>, x1: vec4<f32>, x2: vec4<f32>, w0: W16, w1: W16, w2: W16) -> Acc {
+    return mac(mac(mac(a, x0, w0), x1, w1), x2, w2);
+}
+
+fn mac_cols4(a: Cols4, x: X6, w0: W16, w1: W16, w2: W16) -> Cols4 {
+    return Cols4(mac_w3(a.c0, x.x0, x.x1, x.x2, w0, w1, w2), mac_w3(a.c1, x.x1, x.x2, x.x3, w0, w1, w2),
+                 mac_w3(a.c2, x.x2, x.x3, x.x4, w0, w1, w2), mac_w3(a.c3, x.x3, x.x4, x.x5, w0, w1, w2));
+}
+
+// Tile t of 32 columns x 2 rows (per item, channel group and depth); ow is lane's first column.
+fn w4_tile(t: u32, lane: u32) -> FwdTile {
+    let wblocks = (p.ow + 31u) / 32u;
+    let hblocks = (p.oh + 3u) / 4u;
+    var r = t;
+    let wb = r % wblocks; r /= wblocks;
+    let hb = r % hblocks; r /= hblocks;
+    let od = r % p.od; r /= p.od;
+    return FwdTile(r / p.co16, r % p.co16, od, hb * 4u, wb * 32u + 4u * lane);
+}
+
+// Channel quad `co` of 4 columns (c0..c3 hold it per column) as 4 vec4 stores along W, `o` the
+// vec4 index of channel co's first column; channels past the count are skipped.
+fn put_cols4(o: u32, co: u32, c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, c3: vec4<f32>, al: vec4<f32>) {
+    let s = p.ycs / 4u;
+    if (co < p.co) { fy4[o] = prelu4(vec4<f32>(c0.x, c1.x, c2.x, c3.x), vec4<f32>(al.x)); }
+    if (co + 1u < p.co) { fy4[o + s] = prelu4(vec4<f32>(c0.y, c1.y, c2.y, c3.y), vec4<f32>(al.y)); }
+    if (co + 2u < p.co) { fy4[o + 2u * s] = prelu4(vec4<f32>(c0.z, c1.z, c2.z, c3.z), vec4<f32>(al.z)); }
+    if (co + 3u < p.co) { fy4[o + 3u * s] = prelu4(vec4<f32>(c0.w, c1.w, c2.w, c3.w), vec4<f32>(al.w)); }
+}
+
+fn put_row_w4(t: FwdTile, oh: u32, pos: u32, a: Cols4, al: Acc) {
+    if (oh >= p.oh) { return; }
+    let co = t.cg * 16u;
+    let o = ((t.n * p.co + co) * p.ycs + pos) / 4u;
+    let s = p.ycs;
+    put_cols4(o, co, a.c0.a0, a.c1.a0, a.c2.a0, a.c3.a0, al.a0);
+    put_cols4(o + s, co + 4u, a.c0.a1, a.c1.a1, a.c2.a1, a.c3.a1, al.a1);
+    put_cols4(o + 2u * s, co + 8u, a.c0.a2, a.c1.a2, a.c2.a2, a.c3.a2, al.a2);
+    put_cols4(o + 3u * s, co + 12u, a.c0.a3, a.c1.a3, a.c2.a3, a.c3.a3, al.a3);
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_forward_tex_w4(ids: LaneIds) { forward_tex_w4(ids, false); }
+
+@compute @workgroup_size(64)
+fn conv_fast_forward_tex_w4_prelu(ids: LaneIds) { forward_tex_w4(ids, true); }
+
+fn forward_tex_w4(ids: LaneIds, act: bool) {
+    let tl = lane_tile(ids);
+    if (tl.x >= p.total) { return; }
+    let ft = w4_tile(tl.x, tl.y);
+    let cq = p.cpad / 4u;
+    let b = tile16(ft.cg);
+    let c = Cols4(b.a0, b.a0, b.a0, b.a0);
+    var a = TileW4(c, c, c, c);
+    let zh = i32(ft.oh0 * p.sh) - i32(p.ph);
+    let zw = i32(ft.ow) - i32(p.pw);
+    // One step per (kd, kh, q): next_tap over kh x 1 "W taps" walks them.
+    let t = tile_taps(ft.od, p.kh * cq);
+    var k = Tap(t.kd0, 0u, 0u, 0u);
+    for (var i = t.y0; i < t.y1; i++) {
+        let zd = u32(t.d0 + i32(k.kd));
+        // Weight row of tap (kd, kh, kw = 0); kw = 1, 2 are cq rows further on.
+        let y = ((k.kd * p.kh + k.kh) * 3u) * cq + k.q;
+        let w0 = weights16(ft.cg, tl.y, tl.z, y);
+        let w1 = weights16(ft.cg, tl.y, tl.z, y + cq);
+        let w2 = weights16(ft.cg, tl.y, tl.z, y + 2u * cq);
+        let h = zh + i32(k.kh);
+        let s = i32(p.sh);
+        a = TileW4(mac_cols4(a.r0, x6(ft.n, k.q, zd, h, zw), w0, w1, w2),
+                   mac_cols4(a.r1, x6(ft.n, k.q, zd, h + s, zw), w0, w1, w2),
+                   mac_cols4(a.r2, x6(ft.n, k.q, zd, h + 2 * s, zw), w0, w1, w2),
+                   mac_cols4(a.r3, x6(ft.n, k.q, zd, h + 3 * s, zw), w0, w1, w2));
+        k = next_tap(k, p.kh, 1u, cq);
+    }
+    if (ft.ow >= p.ow) { return; }
+    let co = ft.cg * 16u;
+    let al = Acc(alpha4(co, act), alpha4(co + 4u, act), alpha4(co + 8u, act), alpha4(co + 12u, act));
+    let pos = p.yoff + ft.od * p.ysd + ft.oh0 * p.ysh + ft.ow;
+    put_row_w4(ft, ft.oh0, pos, a.r0, al);
+    put_row_w4(ft, ft.oh0 + 1u, pos + p.ysh, a.r1, al);
+    put_row_w4(ft, ft.oh0 + 2u, pos + 2u * p.ysh, a.r2, al);
+    put_row_w4(ft, ft.oh0 + 3u, pos + 3u * p.ysh, a.r3, al);
+}

@@ -117,8 +117,8 @@ pub(super) fn direct_fits(gpu: &Gpu, ops: Operands, g: &Geometry, f: &Folded) ->
 
 /// The tiled forward with parameters `p` (of the dispatch geometry, output layout included)
 /// on packed operands: per invocation 8 outputs along W x 16 output channels (buffers), or
-/// per subgroup of 8 lanes 8 outputs along W x 8 rows x 16 output channels (textures; 4
-/// channels when there are no more).
+/// per subgroup of 8 lanes 8 outputs along W x 8 rows x 16 output channels (textures; 4 or 8
+/// channels when there are no more; 32 outputs along W x 4 rows where [`cols4`] holds).
 #[allow(clippy::too_many_arguments)]
 fn forward_packed(
     gpu: &Gpu,
@@ -134,6 +134,12 @@ fn forward_packed(
     let bias = b.map_or(Arg::Absent, Arg::R);
     let args = [xp.arg(), wp.arg(), bias, Arg::W(y), alpha.map_or(Arg::Absent, Arg::R)];
     if let Packed::Texture(..) = xp {
+        if cols4(&p) {
+            let tiles = (p.n * p.co16 * p.od * p.oh.div_ceil(4) * p.ow.div_ceil(32)) as usize;
+            let p = Params { total: tiles as u32, ..p };
+            let entry = if alpha.is_some() { "conv_fast_forward_tex_w4_prelu" } else { "conv_fast_forward_tex_w4" };
+            return gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?);
+        }
         let tiles = (p.n * p.co16 * p.od * p.oh.div_ceil(8) * p.ow.div_ceil(8)) as usize;
         let p = Params { total: tiles as u32, ..p };
         // At most 4 or 8 output channels: the 4- or 8-channel tile (co16 = 1, so the same
@@ -157,6 +163,17 @@ fn forward_packed(
     }
     let tiles = (p.n * p.co16 * p.od * p.oh * p.ow.div_ceil(8)) as usize;
     dispatch(gpu, pass, "conv_fast_forward", p, &args[..4], tiles)
+}
+
+/// Whether the texture forward of `p` runs `conv_fast_forward_tex_w4` (a lane 4 columns x 2
+/// rows x 16 channels, the 3 W taps in one loop step, each channel's 4 columns one vec4
+/// store): more than 8 output channels, 3 W taps at column stride 1, and an output layout
+/// whose rows hold whole, aligned quads of columns (the shader binds the output as vec4s);
+/// rows of 32 columns or more, where at most an eighth of the tile's lanes idle past the
+/// row's end (at 16 columns half of them did: 1.6x slower than the 8-column tile).
+fn cols4(p: &Params) -> bool {
+    let whole = [p.ow, p.ycs, p.ysd, p.ysh, p.yoff].iter().all(|v| v % 4 == 0);
+    p.co > 8 && p.kw == 3 && p.sw == 1 && p.ysw == 1 && whole && 8 * p.ow >= 7 * p.ow.div_ceil(32) * 32
 }
 
 /// Tiled `y = conv(x, w) + b` (any stride and padding), with taps folded into channels
@@ -385,8 +402,20 @@ fn backward_input_packed(
         }
         return backward_input_k5s2(gpu, pass, g, dyp, w, b, dx, cpad);
     }
+    for (pack, p) in phases(g, cpad) {
+        let wp = pack_w(gpu, pass, pack, w, tex)?;
+        forward_packed(gpu, pass, p, dyp, &wp, b, alpha, dx)?;
+    }
+    Ok(())
+}
+
+/// The stride-1 convs of `g`'s input gradient on dy packed with `cpad` channels, one per output
+/// phase that has positions: the weight packing's parameters (that phase's flipped,
+/// channel-swapped sub-kernel) and the conv's, whose output layout writes every stride-th dx value.
+fn phases(g: &Geometry, cpad: usize) -> Vec<(Params, Params)> {
     let [_, fh, fw] = g.input;
     let [sd, sh, sw] = g.stride;
+    let mut out = Vec::new();
     for i in 0..volume(g.stride) {
         let r = [i / (sh * sw), (i / sw) % sh, i % sw];
         let ph = [0, 1, 2].map(|a| stride_phase(r[a], g.input[a], g.kernel[a], g.stride[a], g.pad[a]));
@@ -409,7 +438,6 @@ fn backward_input_packed(
         let [pd, ph_, pw] = ph.each_ref().map(|q| u(q.k0));
         let step = g.stride.map(u);
         let pack = Params { flip: 1, id, ih, iw, sd: step[0], sh: step[1], sw: step[2], pd, ph: ph_, pw, ..base };
-        let wp = pack_w(gpu, pass, pack, w, tex)?;
         // Negative pads travel as two's complement; the shader reads them back with i32().
         let [pd, ph_, pw] = ph.each_ref().map(|q| q.pad as i32 as u32);
         let p = Params {
@@ -423,9 +451,9 @@ fn backward_input_packed(
             yoff: u((r[0] * fh + r[1]) * fw + r[2]),
             ..base
         };
-        forward_packed(gpu, pass, p, dyp, &wp, b, alpha, dx)?;
+        out.push((pack, p));
     }
-    Ok(())
+    out
 }
 
 /// Whether [`backward_input_k5s2`] runs `g`'s input gradient: one input channel, a 5^3
@@ -458,3 +486,43 @@ fn backward_input_k5s2(
     let grid = [((cols + g.pad[2] % 2).div_ceil(16) * rows.div_ceil(8)) as u32, depth.div_ceil(8) as u32, g.n as u32];
     gpu.dispatch(pass, TEX_SHADER, "conv_direct_backward_input_k5s2", &p, &args, grid)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A conv's geometry: `n` items, `ci` -> `co` channels, input and output sizes, kernel,
+    /// stride and padding before.
+    #[allow(clippy::too_many_arguments)]
+    fn geometry(n: usize, ci: usize, co: usize, input: [usize; 3], output: [usize; 3], kernel: [usize; 3], stride: [usize; 3], pad: [usize; 3]) -> Geometry {
+        Geometry { n, ci, co, input, output, kernel, stride, pad, rank: 5 }
+    }
+
+    /// `cols4` holds for the shapes of the kernel test `texture_forward_of_four_columns_a_lane`
+    /// (kernels-tests/conv/cols4.rs), so that test runs `conv_fast_forward_tex_w4` and a narrower
+    /// rule fails here; and not where a lane's vec4 stores or its 3 W taps do not fit.
+    #[test]
+    fn cols4_runs_the_kernel_tests_shapes() {
+        let fwd = |g: &Geometry| cols4(&params(g, g.ci.div_ceil(4) * 4));
+        let bwd = |g: &Geometry| phases(g, g.co.div_ceil(4) * 4).iter().all(|(_, p)| cols4(p));
+        let c20 = geometry(1, 5, 20, [1, 7, 28], [1, 7, 28], [1, 3, 3], [1; 3], [0, 1, 1]);
+        let c3d = geometry(1, 16, 12, [3, 5, 32], [3, 5, 32], [3; 3], [1; 3], [1; 3]);
+        let s2 = geometry(2, 12, 3, [1, 9, 32], [1, 5, 32], [1, 3, 3], [1, 2, 1], [0, 0, 1]);
+        assert!(fwd(&c20) && fwd(&c3d) && bwd(&c3d) && bwd(&s2));
+        assert_eq!(phases(&s2, 4).len(), 2, "two row phases");
+        // The transposed conv 4 -> 9 is the input gradient of a conv 9 -> 4.
+        assert!(bwd(&geometry(1, 9, 4, [1, 5, 60], [1, 5, 60], [1, 3, 3], [1; 3], [0, 1, 1])));
+        // Not: 8 output channels, 4 W taps, column stride 2, a width off the quads or too narrow.
+        assert!(!fwd(&Geometry { co: 8, ..c20 }));
+        assert!(!fwd(&Geometry { kernel: [1, 3, 4], ..c20 }));
+        assert!(!fwd(&Geometry { stride: [1, 1, 2], output: [1, 7, 14], ..c20 }));
+        assert!(!fwd(&Geometry { output: [1, 7, 30], ..c20 }));
+        assert!(!fwd(&Geometry { output: [1, 7, 24], ..c20 }));
+        assert!(!bwd(&geometry(1, 16, 16, [1, 8, 32], [1, 4, 32], [1, 3, 3], [1, 2, 2], [0, 1, 1])), "column phases");
+        // A layout whose columns are not adjacent, or whose quads start off a multiple of 4.
+        let p = params(&c20, 8);
+        assert!(cols4(&p));
+        assert!(!cols4(&Params { ysw: 2, ..p }) && !cols4(&Params { yoff: 2, ..p }) && !cols4(&Params { ysh: 30, ..p }));
+    }
+}
+
