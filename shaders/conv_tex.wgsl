@@ -424,11 +424,11 @@ fn forward_tex4_rows3(ids: LaneIds, act: bool) {
     put_tile4(ft, a, act);
 }
 
-// ---- forward, 4 columns a lane: 8 lanes = 32 outputs along W; each lane 2 rows x 4 columns x 16 channels
+// ---- forward, 4 columns a lane: 8 lanes = 32 outputs along W; each lane 4 rows x 4 columns x 16 channels
 // For 3 W taps at column stride 1 (src/ops/conv_fast.rs says when). One loop step per (kd, kh,
 // quad) does all 3 W taps: each accumulator gets 12 FMAs a step where the tile above gives it
-// 4 (lavapipe copies every loop-carried value through the lane mask each step, ~2.5 FMAs at
-// the ceiling), a lane's 4 columns x 3 taps read 6 x texels a row instead of 12, and each
+// 4 (lavapipe copies every loop-carried value through the lane mask each step: a plain FMA in
+// such a loop costs 3.5 at the ceiling), a lane's 4 columns x 3 taps read 6 x texels a row instead of 12, and each
 // channel's 4 columns are one vec4 store (a store is a loop over the lanes either way:
 // `rendernet bench --operands`). The output bound as vec4s: ow, ycs, ysd, ysh, yoff are
 // multiples of 4 and ysw is 1 (the caller checks).
@@ -454,7 +454,7 @@ fn mac_cols4(a: Cols4, x: X6, w0: W16, w1: W16, w2: W16) -> Cols4 {
                  mac_w3(a.c2, x.x2, x.x3, x.x4, w0, w1, w2), mac_w3(a.c3, x.x3, x.x4, x.x5, w0, w1, w2));
 }
 
-// Tile t of 32 columns x 2 rows (per item, channel group and depth); ow is lane's first column.
+// Tile t of 32 columns x 4 rows (per item, channel group and depth); ow is lane's first column.
 fn w4_tile(t: u32, lane: u32) -> FwdTile {
     let wblocks = (p.ow + 31u) / 32u;
     let hblocks = (p.oh + 3u) / 4u;

@@ -9,8 +9,9 @@ use super::*;
 /// with 3 W taps at column stride 1 on rows of whole column quads, 28 or more of them
 /// (`conv_fast::cols4`; its unit test `cols4_runs_the_kernel_tests_shapes` holds for these
 /// shapes, so a narrower rule fails there instead of quietly testing the 8-column tile), and the
-/// input gradient of such convs: 5 -> 20 (two input quads, the first padded; a second channel
-/// group part-filled) on 7 x 28 (a row block of 4 and one of 3; lane 7 past the row's end);
+/// input gradient of such convs: 8 -> 20 (two input quads; a second channel group part-filled;
+/// fewer input channels fold into the direct kernels) on 7 x 28 (a row block of 4 and one of 3;
+/// lane 7 past the row's end);
 /// 16 -> 12 3D (depth taps off the grid, 4 input quads) on 3 x 5 x 32, whose input gradient
 /// (12 -> 16) runs it too; 12 -> 3 at row stride 2 with explicit padding, batch 2 on 9 x 32,
 /// whose input gradient runs it per row phase (rows 64 values apart, the second phase 32 values
@@ -18,7 +19,7 @@ use super::*;
 #[test]
 fn texture_forward_of_four_columns_a_lane() {
     let with = |c: Case, n: usize, ci: usize, co: usize, input: [usize; 3]| Case { n, ci, co, input, kernel: ConvKernel::Texture, ..c };
-    check(&with(conv2d([3, 3], [1, 1], Padding::Same), 1, 5, 20, [1, 7, 28]), 160);
+    check(&with(conv2d([3, 3], [1, 1], Padding::Same), 1, 8, 20, [1, 7, 28]), 160);
     check(&with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 1, 16, 12, [3, 5, 32]), 161);
     check(&with(conv2d([3, 3], [2, 1], Padding::explicit_2d([0, 1], [2, 1])), 2, 12, 3, [1, 9, 32]), 162);
     check(&with(transposed2d([3, 3], [1, 1], Padding::Same, None), 1, 4, 9, [1, 5, 60]), 163);

@@ -165,12 +165,12 @@ fn forward_packed(
     dispatch(gpu, pass, "conv_fast_forward", p, &args[..4], tiles)
 }
 
-/// Whether the texture forward of `p` runs `conv_fast_forward_tex_w4` (a lane 4 columns x 2
+/// Whether the texture forward of `p` runs `conv_fast_forward_tex_w4` (a lane 4 columns x 4
 /// rows x 16 channels, the 3 W taps in one loop step, each channel's 4 columns one vec4
 /// store): more than 8 output channels, 3 W taps at column stride 1, and an output layout
 /// whose rows hold whole, aligned quads of columns (the shader binds the output as vec4s);
-/// rows of 32 columns or more, where at most an eighth of the tile's lanes idle past the
-/// row's end (at 16 columns half of them did: 1.6x slower than the 8-column tile).
+/// and at most an eighth of the row's lanes idle past its end (28-32 columns, 56-64, 84-96,
+/// 112-128, ...: at 16 columns half of them did, 1.6x slower than the 8-column tile).
 fn cols4(p: &Params) -> bool {
     let whole = [p.ow, p.ycs, p.ysd, p.ysh, p.yoff].iter().all(|v| v % 4 == 0);
     p.co > 8 && p.kw == 3 && p.sw == 1 && p.ysw == 1 && whole && 8 * p.ow >= 7 * p.ow.div_ceil(32) * 32
@@ -503,9 +503,10 @@ mod tests {
     /// rule fails here; and not where a lane's vec4 stores or its 3 W taps do not fit.
     #[test]
     fn cols4_runs_the_kernel_tests_shapes() {
-        let fwd = |g: &Geometry| cols4(&params(g, g.ci.div_ceil(4) * 4));
+        // Unfolded (a fold runs the direct kernels instead), and cols4.
+        let fwd = |g: &Geometry| fold(g, 4).fold() == 1 && cols4(&params(g, g.ci.div_ceil(4) * 4));
         let bwd = |g: &Geometry| phases(g, g.co.div_ceil(4) * 4).iter().all(|(_, p)| cols4(p));
-        let c20 = geometry(1, 5, 20, [1, 7, 28], [1, 7, 28], [1, 3, 3], [1; 3], [0, 1, 1]);
+        let c20 = geometry(1, 8, 20, [1, 7, 28], [1, 7, 28], [1, 3, 3], [1; 3], [0, 1, 1]);
         let c3d = geometry(1, 16, 12, [3, 5, 32], [3, 5, 32], [3; 3], [1; 3], [1; 3]);
         let s2 = geometry(2, 12, 3, [1, 9, 32], [1, 5, 32], [1, 3, 3], [1, 2, 1], [0, 0, 1]);
         assert!(fwd(&c20) && fwd(&c3d) && bwd(&c3d) && bwd(&s2));
@@ -518,6 +519,8 @@ mod tests {
         assert!(!fwd(&Geometry { stride: [1, 1, 2], output: [1, 7, 14], ..c20 }));
         assert!(!fwd(&Geometry { output: [1, 7, 30], ..c20 }));
         assert!(!fwd(&Geometry { output: [1, 7, 24], ..c20 }));
+        assert!(!fwd(&Geometry { output: [1, 7, 48], ..c20 }), "a quarter of the lanes idle");
+        assert!(!fwd(&Geometry { ci: 5, ..c20 }), "5 input channels fold: the direct kernels");
         assert!(!bwd(&geometry(1, 16, 16, [1, 8, 32], [1, 4, 32], [1, 3, 3], [1, 2, 2], [0, 1, 1])), "column phases");
         // A layout whose columns are not adjacent, or whose quads start off a multiple of 4.
         let p = params(&c20, 8);
