@@ -114,13 +114,19 @@ fn fwd_tile(t: u32, lane: u32) -> FwdTile {
 
 // The same over `groups` output channel groups (conv_direct.wgsl's groups of 8).
 fn fwd_tile_of(t: u32, lane: u32, groups: u32) -> FwdTile {
-    let wblocks = (p.ow + 7u) / 8u;
-    let hblocks = (p.oh + 7u) / 8u;
+    return block_tile(t, lane, 1u, 8u, groups);
+}
+
+// Tile t of blocks of `rows` rows x 8 `cols`-column lanes (per item, channel group of
+// `groups` and depth); ow is the lane's first column.
+fn block_tile(t: u32, lane: u32, cols: u32, rows: u32, groups: u32) -> FwdTile {
+    let wblocks = (p.ow + 8u * cols - 1u) / (8u * cols);
+    let hblocks = (p.oh + rows - 1u) / rows;
     var r = t;
     let wb = r % wblocks; r /= wblocks;
     let hb = r % hblocks; r /= hblocks;
     let od = r % p.od; r /= p.od;
-    return FwdTile(r / groups, r % groups, od, hb * 8u, wb * 8u + lane);
+    return FwdTile(r / groups, r % groups, od, hb * rows, (wb * 8u + lane) * cols);
 }
 
 // Output offset of a tile's first row in the output layout.
@@ -454,17 +460,6 @@ fn mac_cols4(a: Cols4, x: X6, w0: W16, w1: W16, w2: W16) -> Cols4 {
                  mac_w3(a.c2, x.x2, x.x3, x.x4, w0, w1, w2), mac_w3(a.c3, x.x3, x.x4, x.x5, w0, w1, w2));
 }
 
-// Tile t of 32 columns x 4 rows (per item, channel group and depth); ow is lane's first column.
-fn w4_tile(t: u32, lane: u32) -> FwdTile {
-    let wblocks = (p.ow + 31u) / 32u;
-    let hblocks = (p.oh + 3u) / 4u;
-    var r = t;
-    let wb = r % wblocks; r /= wblocks;
-    let hb = r % hblocks; r /= hblocks;
-    let od = r % p.od; r /= p.od;
-    return FwdTile(r / p.co16, r % p.co16, od, hb * 4u, wb * 32u + 4u * lane);
-}
-
 // Channel quad `co` of 4 columns (c0..c3 hold it per column) as 4 vec4 stores along W, `o` the
 // vec4 index of channel co's first column; channels past the count are skipped.
 fn put_cols4(o: u32, co: u32, c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, c3: vec4<f32>, al: vec4<f32>) {
@@ -495,13 +490,15 @@ fn conv_fast_forward_tex_w4_prelu(ids: LaneIds) { forward_tex_w4(ids, true); }
 fn forward_tex_w4(ids: LaneIds, act: bool) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
-    let ft = w4_tile(tl.x, tl.y);
+    // Tiles of 32 columns x 4 rows.
+    let ft = block_tile(tl.x, tl.y, 4u, 4u, p.co16);
     let cq = p.cpad / 4u;
     let b = tile16(ft.cg);
     let c = Cols4(b.a0, b.a0, b.a0, b.a0);
     var a = TileW4(c, c, c, c);
     let zh = i32(ft.oh0 * p.sh) - i32(p.ph);
     let zw = i32(ft.ow) - i32(p.pw);
+    let s = i32(p.sh);
     // One step per (kd, kh, q): next_tap over kh x 1 "W taps" walks them.
     let t = tile_taps(ft.od, p.kh * cq);
     var k = Tap(t.kd0, 0u, 0u, 0u);
@@ -513,7 +510,6 @@ fn forward_tex_w4(ids: LaneIds, act: bool) {
         let w1 = weights16(ft.cg, tl.y, tl.z, y + cq);
         let w2 = weights16(ft.cg, tl.y, tl.z, y + 2u * cq);
         let h = zh + i32(k.kh);
-        let s = i32(p.sh);
         a = TileW4(mac_cols4(a.r0, x6(ft.n, k.q, zd, h, zw), w0, w1, w2),
                    mac_cols4(a.r1, x6(ft.n, k.q, zd, h + s, zw), w0, w1, w2),
                    mac_cols4(a.r2, x6(ft.n, k.q, zd, h + 2 * s, zw), w0, w1, w2),
@@ -523,7 +519,7 @@ fn forward_tex_w4(ids: LaneIds, act: bool) {
     if (ft.ow >= p.ow) { return; }
     let co = ft.cg * 16u;
     let al = Acc(alpha4(co, act), alpha4(co + 4u, act), alpha4(co + 8u, act), alpha4(co + 12u, act));
-    let pos = p.yoff + ft.od * p.ysd + ft.oh0 * p.ysh + ft.ow;
+    let pos = tile_pos(ft);
     put_row_w4(ft, ft.oh0, pos, a.r0, al);
     put_row_w4(ft, ft.oh0 + 1u, pos + p.ysh, a.r1, al);
     put_row_w4(ft, ft.oh0 + 2u, pos + 2u * p.ysh, a.r2, al);
