@@ -24,22 +24,29 @@ fn dy_quads() -> u32 {
     return select(p.co16 * 4u, (p.co + 3u) / 4u, p.co <= 8u);
 }
 
-struct Acc16 { a: array<vec4<f32>, 16> }
-
-// acc[o] += dy[o] * x for the 16 output channels of the position held by lane `j` of the
-// group (g0..g3: its dy texels).
-fn bw_step(acc: Acc16, x: vec4<f32>, g0: vec4<f32>, g1: vec4<f32>, g2: vec4<f32>, g3: vec4<f32>, j: u32) -> Acc16 {
-    return bw_mac16(acc, x, subgroupShuffle(g0, j), subgroupShuffle(g1, j), subgroupShuffle(g2, j), subgroupShuffle(g3, j));
+// a + sum_j c_j x_j over a step's 8 positions (c: one output channel's dy, positions 0..3 in
+// p, 4..7 in q): one accumulator through 8 multiply-adds in a row, so that it is loaded and
+// stored once for them. lavapipe keeps a tile's accumulators in memory; with one
+// multiply-add per accumulator a position (as the tiles did), a store per multiply-add bounds
+// the tile on AMD Zen (README "Weight gradients an accumulator at a time").
+fn chain8(a: vec4<f32>, p: vec4<f32>, q: vec4<f32>, x0: vec4<f32>, x1: vec4<f32>, x2: vec4<f32>, x3: vec4<f32>,
+          x4: vec4<f32>, x5: vec4<f32>, x6: vec4<f32>, x7: vec4<f32>) -> vec4<f32> {
+    return a + p.x * x0 + p.y * x1 + p.z * x2 + p.w * x3 + q.x * x4 + q.y * x5 + q.z * x6 + q.w * x7;
 }
 
-// acc[o] += d[o] * x for the 16 output channels d0..d3 hold.
-fn bw_mac16(acc: Acc16, x: vec4<f32>, d0: vec4<f32>, d1: vec4<f32>, d2: vec4<f32>, d3: vec4<f32>) -> Acc16 {
-    var r = acc;
-    r.a[0] += d0.x * x; r.a[1] += d0.y * x; r.a[2] += d0.z * x; r.a[3] += d0.w * x;
-    r.a[4] += d1.x * x; r.a[5] += d1.y * x; r.a[6] += d1.z * x; r.a[7] += d1.w * x;
-    r.a[8] += d2.x * x; r.a[9] += d2.y * x; r.a[10] += d2.z * x; r.a[11] += d2.w * x;
-    r.a[12] += d3.x * x; r.a[13] += d3.y * x; r.a[14] += d3.z * x; r.a[15] += d3.w * x;
-    return r;
+// A step's dy of 4 output channels (quad texel g: lane j's is position j's) by channel:
+// lo[c] holds channel c at positions 0..3, hi[c] at 4..7.
+struct DyT { lo: array<vec4<f32>, 4>, hi: array<vec4<f32>, 4> }
+
+fn dy_t(g: vec4<f32>, base: u32) -> DyT {
+    let d0 = subgroupShuffle(g, base); let d1 = subgroupShuffle(g, base + 1u);
+    let d2 = subgroupShuffle(g, base + 2u); let d3 = subgroupShuffle(g, base + 3u);
+    let d4 = subgroupShuffle(g, base + 4u); let d5 = subgroupShuffle(g, base + 5u);
+    let d6 = subgroupShuffle(g, base + 6u); let d7 = subgroupShuffle(g, base + 7u);
+    return DyT(array<vec4<f32>, 4>(vec4<f32>(d0.x, d1.x, d2.x, d3.x), vec4<f32>(d0.y, d1.y, d2.y, d3.y),
+                                   vec4<f32>(d0.z, d1.z, d2.z, d3.z), vec4<f32>(d0.w, d1.w, d2.w, d3.w)),
+               array<vec4<f32>, 4>(vec4<f32>(d4.x, d5.x, d6.x, d7.x), vec4<f32>(d4.y, d5.y, d6.y, d7.y),
+                                   vec4<f32>(d4.z, d5.z, d6.z, d7.z), vec4<f32>(d4.w, d5.w, d6.w, d7.w)));
 }
 
 fn bw_x(n: u32, q: u32, zd: i32, zh: i32, zw: i32) -> vec4<f32> {
@@ -104,79 +111,72 @@ fn put_dw(o: u32, c: u32, stride: u32, v: vec4<f32>) {
     bpart[o + 3u * stride + c] = v.w;
 }
 
+// 4 output channels' dw over a step (d: their dy by channel, dy_t; x: the 8 positions' x).
+struct Acc4 { a0: vec4<f32>, a1: vec4<f32>, a2: vec4<f32>, a3: vec4<f32> }
+
+fn rows8(a: vec4<f32>, p: vec4<f32>, q: vec4<f32>, x: Rows) -> vec4<f32> {
+    return chain8(a, p, q, x.r0, x.r1, x.r2, x.r3, x.r4, x.r5, x.r6, x.r7);
+}
+
+fn quad8(a: Acc4, d: DyT, x: Rows) -> Acc4 {
+    return Acc4(rows8(a.a0, d.lo[0], d.hi[0], x), rows8(a.a1, d.lo[1], d.hi[1], x),
+                rows8(a.a2, d.lo[2], d.hi[2], x), rows8(a.a3, d.lo[3], d.hi[3], x));
+}
+
+// dw of output channels c.. (columns c..c + 3 of part rows `stride` apart from o).
+fn put_dw4(o: u32, c: u32, stride: u32, a: Acc4) {
+    put_dw(o, c, stride, a.a0); put_dw(o, c + 1u, stride, a.a1);
+    put_dw(o, c + 2u, stride, a.a2); put_dw(o, c + 3u, stride, a.a3);
+}
+
+// The lane's dy of quad `quad` over the step by channel (dy_texel, then dy_t).
+fn dy_step(w: Walk, b: BwLane, quad: u32) -> DyT {
+    return dy_t(dy_texel(w, b.lane, quad), b.base);
+}
+
 @compute @workgroup_size(64)
 fn conv_fast_backward_weight_tex(ids: LaneIds) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
     let b = bw_lane(tl);
-    let cg = b.bp.cg; let base = b.base;
-    var acc: Acc16;
+    let q0 = b.bp.cg * 4u;
+    var a0: Acc4; var a1: Acc4; var a2: Acc4; var a3: Acc4;
     var w = walk_from(b.span.x);
     let steps = walk_steps(b.span);
     for (var i = 0u; i < steps; i++) {
         // Lane l fetches the 16 dy values at ow0 + l.
-        let g0 = dy_texel(w, b.lane, cg * 4u);
-        let g1 = dy_texel(w, b.lane, cg * 4u + 1u);
-        let g2 = dy_texel(w, b.lane, cg * 4u + 2u);
-        let g3 = dy_texel(w, b.lane, cg * 4u + 3u);
         let x = bw_xs(w, b);
-        // Written out: llvmpipe does not unroll loops.
-        acc = bw_step(acc, x.r0, g0, g1, g2, g3, base);
-        acc = bw_step(acc, x.r1, g0, g1, g2, g3, base + 1u);
-        acc = bw_step(acc, x.r2, g0, g1, g2, g3, base + 2u);
-        acc = bw_step(acc, x.r3, g0, g1, g2, g3, base + 3u);
-        acc = bw_step(acc, x.r4, g0, g1, g2, g3, base + 4u);
-        acc = bw_step(acc, x.r5, g0, g1, g2, g3, base + 5u);
-        acc = bw_step(acc, x.r6, g0, g1, g2, g3, base + 6u);
-        acc = bw_step(acc, x.r7, g0, g1, g2, g3, base + 7u);
+        a0 = quad8(a0, dy_step(w, b, q0), x);
+        a1 = quad8(a1, dy_step(w, b, q0 + 1u), x);
+        a2 = quad8(a2, dy_step(w, b, q0 + 2u), x);
+        a3 = quad8(a3, dy_step(w, b, q0 + 3u), x);
         w = walk_next(w);
     }
     if (!b.live) { return; }
     let copad = p.co16 * 16u;
-    let o = bw_part_row(b) * copad + cg * 16u;
-    for (var k = 0u; k < 16u; k++) {
-        put_dw(o, k, copad, acc.a[k]);
-    }
+    let o = bw_part_row(b) * copad + q0 * 4u;
+    put_dw4(o, 0u, copad, a0); put_dw4(o, 4u, copad, a1);
+    put_dw4(o, 8u, copad, a2); put_dw4(o, 12u, copad, a3);
 }
 
 // ---- backward weight, narrow (co <= 4): as above with one dy texel per position ----------
 // dy packed with 4 channels (one quad per voxel); each lane accumulates dw[4 channels][4
 // channels] of its (tap, quad) pair; part keeps the 16-column layout (columns 0..3 written).
-struct Acc4 { a0: vec4<f32>, a1: vec4<f32>, a2: vec4<f32>, a3: vec4<f32> }
-
-fn bw_step4(acc: Acc4, x: vec4<f32>, g: vec4<f32>, j: u32) -> Acc4 {
-    return bw_mac4(acc, x, subgroupShuffle(g, j));
-}
-
-fn bw_mac4(acc: Acc4, x: vec4<f32>, d: vec4<f32>) -> Acc4 {
-    return Acc4(acc.a0 + d.x * x, acc.a1 + d.y * x, acc.a2 + d.z * x, acc.a3 + d.w * x);
-}
-
 @compute @workgroup_size(64)
 fn conv_fast_backward_weight_tex4(ids: LaneIds) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
     // co16 = 1: channel group 0.
     let b = bw_lane(tl);
-    let base = b.base;
-    var acc = Acc4(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    var acc: Acc4;
     var w = walk_from(b.span.x);
     let steps = walk_steps(b.span);
     for (var i = 0u; i < steps; i++) {
-        let g = dy_texel(w, b.lane, 0u);
-        let x = bw_xs(w, b);
-        acc = bw_step4(acc, x.r0, g, base);
-        acc = bw_step4(acc, x.r1, g, base + 1u);
-        acc = bw_step4(acc, x.r2, g, base + 2u);
-        acc = bw_step4(acc, x.r3, g, base + 3u);
-        acc = bw_step4(acc, x.r4, g, base + 4u);
-        acc = bw_step4(acc, x.r5, g, base + 5u);
-        acc = bw_step4(acc, x.r6, g, base + 6u);
-        acc = bw_step4(acc, x.r7, g, base + 7u);
+        acc = quad8(acc, dy_step(w, b, 0u), bw_xs(w, b));
         w = walk_next(w);
     }
     if (!b.live) { return; }
-    put_dw4(bw_part_row(b) * 16u, acc);
+    put_dw4(bw_part_row(b) * 16u, 0u, 16u, acc);
 }
 
 // ---- backward weight, half width (5-8 output channels): two dy texels per position --------
@@ -184,49 +184,24 @@ fn conv_fast_backward_weight_tex4(ids: LaneIds) {
 // packing serves both gradients), where the 16-channel kernel above would multiply 8-11 zero
 // channels of 16; each lane accumulates dw[8 channels][4 channels] of its (tap, quad) pair;
 // part keeps the 16-column layout (columns 0..7 written).
-struct BwAcc8 { a: array<vec4<f32>, 8> }
-
-fn bw_step8(acc: BwAcc8, x: vec4<f32>, g0: vec4<f32>, g1: vec4<f32>, j: u32) -> BwAcc8 {
-    return bw_mac8(acc, x, subgroupShuffle(g0, j), subgroupShuffle(g1, j));
-}
-
-fn bw_mac8(acc: BwAcc8, x: vec4<f32>, d0: vec4<f32>, d1: vec4<f32>) -> BwAcc8 {
-    var r = acc;
-    r.a[0] += d0.x * x; r.a[1] += d0.y * x; r.a[2] += d0.z * x; r.a[3] += d0.w * x;
-    r.a[4] += d1.x * x; r.a[5] += d1.y * x; r.a[6] += d1.z * x; r.a[7] += d1.w * x;
-    return r;
-}
-
 @compute @workgroup_size(64)
 fn conv_fast_backward_weight_tex8(ids: LaneIds) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
     // co16 = 1: channel group 0.
     let b = bw_lane(tl);
-    let base = b.base;
-    var acc: BwAcc8;
+    var lo: Acc4; var hi: Acc4;
     var w = walk_from(b.span.x);
     let steps = walk_steps(b.span);
     for (var i = 0u; i < steps; i++) {
-        // Lane l fetches the two dy texels at ow0 + l.
-        let g0 = dy_texel(w, b.lane, 0u);
-        let g1 = dy_texel(w, b.lane, 1u);
         let x = bw_xs(w, b);
-        acc = bw_step8(acc, x.r0, g0, g1, base);
-        acc = bw_step8(acc, x.r1, g0, g1, base + 1u);
-        acc = bw_step8(acc, x.r2, g0, g1, base + 2u);
-        acc = bw_step8(acc, x.r3, g0, g1, base + 3u);
-        acc = bw_step8(acc, x.r4, g0, g1, base + 4u);
-        acc = bw_step8(acc, x.r5, g0, g1, base + 5u);
-        acc = bw_step8(acc, x.r6, g0, g1, base + 6u);
-        acc = bw_step8(acc, x.r7, g0, g1, base + 7u);
+        lo = quad8(lo, dy_step(w, b, 0u), x);
+        hi = quad8(hi, dy_step(w, b, 1u), x);
         w = walk_next(w);
     }
     if (!b.live) { return; }
     let o = bw_part_row(b) * 16u;
-    for (var c = 0u; c < 8u; c++) {
-        put_dw(o, c, 16u, acc.a[c]);
-    }
+    put_dw4(o, 0u, 16u, lo); put_dw4(o, 4u, 16u, hi);
 }
 
 // ---- backward weight, three W taps a lane (kw = 3, sw = 1, not folded) ----------------------
@@ -257,16 +232,31 @@ fn bw_xs10(w: Walk, b: BwLane) -> Xs10 {
     return Xs10(bw_xs(w, b), bw_x(w.n, b.bp.q, z.x, z.y, zw + 8), bw_x(w.n, b.bp.q, z.x, z.y, zw + 9));
 }
 
-struct Acc4x3 { t0: Acc4, t1: Acc4, t2: Acc4 }
+// A lane's dw of one output channel at the three W taps (vec4: its 4 input channels).
+struct Taps3 { k0: vec4<f32>, k1: vec4<f32>, k2: vec4<f32> }
 
-fn bw_step4x3(acc: Acc4x3, x0: vec4<f32>, x1: vec4<f32>, x2: vec4<f32>, g: vec4<f32>, j: u32) -> Acc4x3 {
-    let d = subgroupShuffle(g, j);
-    return Acc4x3(bw_mac4(acc.t0, x0, d), bw_mac4(acc.t1, x1, d), bw_mac4(acc.t2, x2, d));
+// One output channel's dw at the 3 taps over a step (tap k reaches x texels k .. k + 7).
+fn taps3(a: Taps3, p: vec4<f32>, q: vec4<f32>, x: Xs10) -> Taps3 {
+    let r = x.r;
+    return Taps3(chain8(a.k0, p, q, r.r0, r.r1, r.r2, r.r3, r.r4, r.r5, r.r6, r.r7),
+                 chain8(a.k1, p, q, r.r1, r.r2, r.r3, r.r4, r.r5, r.r6, r.r7, x.x8),
+                 chain8(a.k2, p, q, r.r2, r.r3, r.r4, r.r5, r.r6, r.r7, x.x8, x.x9));
 }
 
-fn put_dw4(o: u32, a: Acc4) {
-    put_dw(o, 0u, 16u, a.a0); put_dw(o, 1u, 16u, a.a1);
-    put_dw(o, 2u, 16u, a.a2); put_dw(o, 3u, 16u, a.a3);
+// 4 output channels' dw at the 3 taps (d: their dy by channel).
+struct Quad3 { c0: Taps3, c1: Taps3, c2: Taps3, c3: Taps3 }
+
+fn quad3(a: Quad3, d: DyT, x: Xs10) -> Quad3 {
+    return Quad3(taps3(a.c0, d.lo[0], d.hi[0], x), taps3(a.c1, d.lo[1], d.hi[1], x),
+                 taps3(a.c2, d.lo[2], d.hi[2], x), taps3(a.c3, d.lo[3], d.hi[3], x));
+}
+
+// Writes a Quad3 (output channels c..c + 3) to the three taps' part rows from o.
+fn put_quad3(o: u32, c: u32, stride: u32, a: Quad3) {
+    let next = p.cpad * stride;
+    put_dw4(o, c, stride, Acc4(a.c0.k0, a.c1.k0, a.c2.k0, a.c3.k0));
+    put_dw4(o + next, c, stride, Acc4(a.c0.k1, a.c1.k1, a.c2.k1, a.c3.k1));
+    put_dw4(o + 2u * next, c, stride, Acc4(a.c0.k2, a.c1.k2, a.c2.k2, a.c3.k2));
 }
 
 @compute @workgroup_size(64)
@@ -275,35 +265,15 @@ fn conv_fast_backward_weight_tex4_w3(ids: LaneIds) {
     if (tl.x >= p.total) { return; }
     // co16 = 1: channel group 0.
     let b = bw_lane3(tl);
-    let base = b.base;
-    var acc: Acc4x3;
+    var acc: Quad3;
     var w = walk_from(b.span.x);
     let steps = walk_steps(b.span);
     for (var i = 0u; i < steps; i++) {
-        let g = dy_texel(w, b.lane, 0u);
-        let x = bw_xs10(w, b);
-        acc = bw_step4x3(acc, x.r.r0, x.r.r1, x.r.r2, g, base);
-        acc = bw_step4x3(acc, x.r.r1, x.r.r2, x.r.r3, g, base + 1u);
-        acc = bw_step4x3(acc, x.r.r2, x.r.r3, x.r.r4, g, base + 2u);
-        acc = bw_step4x3(acc, x.r.r3, x.r.r4, x.r.r5, g, base + 3u);
-        acc = bw_step4x3(acc, x.r.r4, x.r.r5, x.r.r6, g, base + 4u);
-        acc = bw_step4x3(acc, x.r.r5, x.r.r6, x.r.r7, g, base + 5u);
-        acc = bw_step4x3(acc, x.r.r6, x.r.r7, x.x8, g, base + 6u);
-        acc = bw_step4x3(acc, x.r.r7, x.x8, x.x9, g, base + 7u);
+        acc = quad3(acc, dy_step(w, b, 0u), bw_xs10(w, b));
         w = walk_next(w);
     }
     if (!b.live) { return; }
-    let o = bw_part_row(b) * 16u;
-    put_dw4(o, acc.t0);
-    put_dw4(o + p.cpad * 16u, acc.t1);
-    put_dw4(o + 2u * p.cpad * 16u, acc.t2);
-}
-
-struct Acc8x3 { t0: BwAcc8, t1: BwAcc8, t2: BwAcc8 }
-
-fn bw_step8x3(acc: Acc8x3, x0: vec4<f32>, x1: vec4<f32>, x2: vec4<f32>, g0: vec4<f32>, g1: vec4<f32>, j: u32) -> Acc8x3 {
-    let d0 = subgroupShuffle(g0, j); let d1 = subgroupShuffle(g1, j);
-    return Acc8x3(bw_mac8(acc.t0, x0, d0, d1), bw_mac8(acc.t1, x1, d0, d1), bw_mac8(acc.t2, x2, d0, d1));
+    put_quad3(bw_part_row(b) * 16u, 0u, 16u, acc);
 }
 
 @compute @workgroup_size(64)
@@ -312,31 +282,18 @@ fn conv_fast_backward_weight_tex8_w3(ids: LaneIds) {
     if (tl.x >= p.total) { return; }
     // Output channels 8 cg .. 8 cg + 7: dy quads 2 cg, 2 cg + 1.
     let b = bw_lane3(tl);
-    let base = b.base; let cg = b.bp.cg;
-    var acc: Acc8x3;
+    let cg = b.bp.cg;
+    var lo: Quad3; var hi: Quad3;
     var w = walk_from(b.span.x);
     let steps = walk_steps(b.span);
     for (var i = 0u; i < steps; i++) {
-        let g0 = dy_texel(w, b.lane, 2u * cg);
-        let g1 = dy_texel(w, b.lane, 2u * cg + 1u);
         let x = bw_xs10(w, b);
-        acc = bw_step8x3(acc, x.r.r0, x.r.r1, x.r.r2, g0, g1, base);
-        acc = bw_step8x3(acc, x.r.r1, x.r.r2, x.r.r3, g0, g1, base + 1u);
-        acc = bw_step8x3(acc, x.r.r2, x.r.r3, x.r.r4, g0, g1, base + 2u);
-        acc = bw_step8x3(acc, x.r.r3, x.r.r4, x.r.r5, g0, g1, base + 3u);
-        acc = bw_step8x3(acc, x.r.r4, x.r.r5, x.r.r6, g0, g1, base + 4u);
-        acc = bw_step8x3(acc, x.r.r5, x.r.r6, x.r.r7, g0, g1, base + 5u);
-        acc = bw_step8x3(acc, x.r.r6, x.r.r7, x.x8, g0, g1, base + 6u);
-        acc = bw_step8x3(acc, x.r.r7, x.x8, x.x9, g0, g1, base + 7u);
+        lo = quad3(lo, dy_step(w, b, 2u * cg), x);
+        hi = quad3(hi, dy_step(w, b, 2u * cg + 1u), x);
         w = walk_next(w);
     }
     if (!b.live) { return; }
     let copad = p.co16 * 16u;
     let o = bw_part_row(b) * copad + 8u * cg;
-    let next = p.cpad * copad;
-    for (var c = 0u; c < 8u; c++) {
-        put_dw(o, c, copad, acc.t0.a[c]);
-        put_dw(o + next, c, copad, acc.t1.a[c]);
-        put_dw(o + 2u * next, c, copad, acc.t2.a[c]);
-    }
+    put_quad3(o, 0u, copad, lo); put_quad3(o, 4u, copad, hi);
 }
