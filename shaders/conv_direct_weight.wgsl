@@ -129,6 +129,20 @@ fn bw_tap1_step(b: Acc8, x: vec4<f32>, d: DyPair) -> Acc8 {
 // fetched feeds 5 tap rows' windows of 4 W taps and their fifth taps alone (17 texel fetches
 // for 200 multiply-adds, against 40 fetches for 320, 120 of them on zero-weight taps), and
 // the tap rows off the grid read zeros from taps4 and tap1 instead of being skipped.
+// Two positions of a step (x: their 4 W taps, d: their dy), each accumulator through both
+// in a row (conv_tex_weight.wgsl's chain8: one load and store for two multiply-adds).
+fn bw_direct_step2(acc: Acc32, x: vec4<f32>, d: DyPair, y: vec4<f32>, e: DyPair) -> Acc32 {
+    return Acc32(
+        array<vec4<f32>, 4>(acc.lo[0] + x.x * d.lo + y.x * e.lo, acc.lo[1] + x.y * d.lo + y.y * e.lo,
+                            acc.lo[2] + x.z * d.lo + y.z * e.lo, acc.lo[3] + x.w * d.lo + y.w * e.lo),
+        array<vec4<f32>, 4>(acc.hi[0] + x.x * d.hi + y.x * e.hi, acc.hi[1] + x.y * d.hi + y.y * e.hi,
+                            acc.hi[2] + x.z * d.hi + y.z * e.hi, acc.hi[3] + x.w * d.hi + y.w * e.hi));
+}
+
+fn bw_tap1_step2(b: Acc8, x: vec4<f32>, d: DyPair, y: vec4<f32>, e: DyPair) -> Acc8 {
+    return Acc8(b.a0 + x.x * d.lo + y.x * e.lo, b.a1 + x.x * d.hi + y.x * e.hi);
+}
+
 @compute @workgroup_size(64)
 fn conv_direct_backward_weight_k5(ids: LaneIds) {
     let tl = lane_tile(ids);
@@ -141,27 +155,30 @@ fn conv_direct_backward_weight_k5(ids: LaneIds) {
     var a0: Acc32; var a1: Acc32; var a2: Acc32; var a3: Acc32; var a4: Acc32;
     var b0: Acc8; var b1: Acc8; var b2: Acc8; var b3: Acc8; var b4: Acc8;
     var w = walk_from(span.x);
-    let steps = walk_steps(span);
+    // Steps of 16 columns: the lane's two positions ow and ow + 8.
+    let steps = walk_steps_by(span, 16u);
     for (var i = 0u; i < steps; i++) {
         let n = w.n; let od = w.od; let oh = w.oh; let ow0 = w.ow0;
         let zd = i32(od * p.sd + k.kd) - i32(p.pd);
         let zh = i32(oh * p.sh) - i32(p.ph);
-        if (zd >= 0 && zd < i32(p.id)) {
-            let ow = ow0 + lane;
-            let d = dy_pair(k.g, n, od, oh, ow);
-            let ws = i32(ow * p.sw) - i32(p.pw);
-            a0 = bw_direct_step(a0, taps4(n, k.c, zd, zh, ws), d.lo, d.hi);
-            a1 = bw_direct_step(a1, taps4(n, k.c, zd, zh + 1, ws), d.lo, d.hi);
-            a2 = bw_direct_step(a2, taps4(n, k.c, zd, zh + 2, ws), d.lo, d.hi);
-            a3 = bw_direct_step(a3, taps4(n, k.c, zd, zh + 3, ws), d.lo, d.hi);
-            a4 = bw_direct_step(a4, taps4(n, k.c, zd, zh + 4, ws), d.lo, d.hi);
-            b0 = bw_tap1_step(b0, tap1(n, k.c, zd, zh, ws + 4), d);
-            b1 = bw_tap1_step(b1, tap1(n, k.c, zd, zh + 1, ws + 4), d);
-            b2 = bw_tap1_step(b2, tap1(n, k.c, zd, zh + 2, ws + 4), d);
-            b3 = bw_tap1_step(b3, tap1(n, k.c, zd, zh + 3, ws + 4), d);
-            b4 = bw_tap1_step(b4, tap1(n, k.c, zd, zh + 4, ws + 4), d);
-        }
-        w = walk_next(w);
+        // No `if` for depths off the grid: they read zeros (stage_row), and lavapipe would run
+        // the body anyway, writing every accumulator through the condition's lane mask.
+        let ow = ow0 + lane;
+        let d = dy_pair(k.g, n, od, oh, ow);
+        let e = dy_pair(k.g, n, od, oh, ow + 8u);
+        let ws = i32(ow * p.sw) - i32(p.pw);
+        let vs = ws + 8 * i32(p.sw);
+        a0 = bw_direct_step2(a0, taps4(n, k.c, zd, zh, ws), d, taps4(n, k.c, zd, zh, vs), e);
+        a1 = bw_direct_step2(a1, taps4(n, k.c, zd, zh + 1, ws), d, taps4(n, k.c, zd, zh + 1, vs), e);
+        a2 = bw_direct_step2(a2, taps4(n, k.c, zd, zh + 2, ws), d, taps4(n, k.c, zd, zh + 2, vs), e);
+        a3 = bw_direct_step2(a3, taps4(n, k.c, zd, zh + 3, ws), d, taps4(n, k.c, zd, zh + 3, vs), e);
+        a4 = bw_direct_step2(a4, taps4(n, k.c, zd, zh + 4, ws), d, taps4(n, k.c, zd, zh + 4, vs), e);
+        b0 = bw_tap1_step2(b0, tap1(n, k.c, zd, zh, ws + 4), d, tap1(n, k.c, zd, zh, vs + 4), e);
+        b1 = bw_tap1_step2(b1, tap1(n, k.c, zd, zh + 1, ws + 4), d, tap1(n, k.c, zd, zh + 1, vs + 4), e);
+        b2 = bw_tap1_step2(b2, tap1(n, k.c, zd, zh + 2, ws + 4), d, tap1(n, k.c, zd, zh + 2, vs + 4), e);
+        b3 = bw_tap1_step2(b3, tap1(n, k.c, zd, zh + 3, ws + 4), d, tap1(n, k.c, zd, zh + 3, vs + 4), e);
+        b4 = bw_tap1_step2(b4, tap1(n, k.c, zd, zh + 4, ws + 4), d, tap1(n, k.c, zd, zh + 4, vs + 4), e);
+        w = walk_next_by(w, 16u);
     }
     put_direct_dw(a0, k, 0u, chunk, lane);
     put_direct_dw(a1, k, 1u, chunk, lane);

@@ -355,11 +355,20 @@ fn walk_from(row: u32) -> Walk {
 
 // Steps over the rows of `span` (chunk_rows).
 fn walk_steps(span: vec2<u32>) -> u32 {
-    return (span.y - span.x) * ((p.ow + 7u) / 8u);
+    return walk_steps_by(span, 8u);
 }
 
 fn walk_next(w: Walk) -> Walk {
-    let ow0 = w.ow0 + 8u;
+    return walk_next_by(w, 8u);
+}
+
+// The same in steps of `cols` columns.
+fn walk_steps_by(span: vec2<u32>, cols: u32) -> u32 {
+    return (span.y - span.x) * ((p.ow + cols - 1u) / cols);
+}
+
+fn walk_next_by(w: Walk, cols: u32) -> Walk {
+    let ow0 = w.ow0 + cols;
     let wc = ow0 >= p.ow;
     let oh = w.oh + u32(wc);
     let wh = oh == p.oh;
