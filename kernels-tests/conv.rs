@@ -25,6 +25,8 @@ use rendernet::ops::conv_transpose::ConvTranspose;
 mod tiled;
 #[path = "conv/cols4.rs"]
 mod cols4;
+#[path = "conv/wide.rs"]
+mod wide;
 
 const ATOL: f64 = 1e-4;
 const RTOL: f64 = 1e-4;

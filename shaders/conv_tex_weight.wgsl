@@ -212,13 +212,18 @@ fn conv_fast_backward_weight_tex8(ids: LaneIds) {
 // (position, tap), and a texel fetch costs lavapipe tens of FMAs (`rendernet bench
 // --operands`). The part layout is unchanged (the three taps are consecutive rows).
 fn bw_lane3(tl: vec3<u32>) -> BwLane {
+    return bw_lane3_of(tl, 8u);
+}
+
+// bw_lane3 over groups of `width` output channels.
+fn bw_lane3_of(tl: vec3<u32>, width: u32) -> BwLane {
     let rows = p.kd * p.kh;
     let cq = p.cpad / 4u;
     let groups = (rows * cq + 7u) / 8u;
     let r = tl.x / groups;
     let pair = (tl.x % groups) * 8u + tl.y;
-    // Output channel groups of 8 (one for the narrow tiles): cg is the group.
-    let per = (p.co + 7u) / 8u;
+    // Output channel groups of `width` (one for the narrow tiles): cg is the group.
+    let per = (p.co + width - 1u) / width;
     let bp = BwPair(r / per, r % per, pair, min(pair / cq, rows - 1u) * 3u, pair % cq);
     return BwLane(bp, pair < rows * cq, tap_axes(bp.tap), chunk_rows(bp.chunk), tl.y, tl.z);
 }
@@ -296,4 +301,28 @@ fn conv_fast_backward_weight_tex8_w3(ids: LaneIds) {
     let copad = p.co16 * 16u;
     let o = bw_part_row(b) * copad + 8u * cg;
     put_quad3(o, 0u, copad, lo); put_quad3(o, 4u, copad, hi);
+}
+
+@compute @workgroup_size(64)
+fn conv_fast_backward_weight_tex16_w3(ids: LaneIds) {
+    let tl = lane_tile(ids);
+    if (tl.x >= p.total) { return; }
+    let b = bw_lane3_of(tl, 16u);
+    let q0 = 4u * b.bp.cg;
+    var a0: Quad3; var a1: Quad3; var a2: Quad3; var a3: Quad3;
+    var w = walk_from(b.span.x);
+    let steps = walk_steps(b.span);
+    for (var i = 0u; i < steps; i++) {
+        let x = bw_xs10(w, b);
+        a0 = quad3(a0, dy_step(w, b, q0), x);
+        a1 = quad3(a1, dy_step(w, b, q0 + 1u), x);
+        a2 = quad3(a2, dy_step(w, b, q0 + 2u), x);
+        a3 = quad3(a3, dy_step(w, b, q0 + 3u), x);
+        w = walk_next(w);
+    }
+    if (!b.live) { return; }
+    let copad = p.co16 * 16u;
+    let o = bw_part_row(b) * copad + 4u * q0;
+    put_quad3(o, 0u, copad, a0); put_quad3(o, 4u, copad, a1);
+    put_quad3(o, 8u, copad, a2); put_quad3(o, 12u, copad, a3);
 }

@@ -54,21 +54,18 @@ pub(super) fn backward_weight_tex(
     let copad = g.co.div_ceil(16) * 16;
     let g = &f.g;
     let taps = volume(g.kernel);
-    // Three W taps a lane where they read overlapping x (`_w3`), 8 output channels a lane at
-    // most; past 8 only with 4+ input channel quads (README "Three W taps a lane", an AMD Zen 4).
-    let w3 = g.kernel[2] == 3 && g.stride[2] == 1 && (g.co <= 8 || cpad >= 16);
-    let (lane_taps, co_groups) = if w3 { (taps / 3, g.co.div_ceil(8)) } else { (taps, copad / 16) };
-    let groups = (lane_taps * cpad / 4).div_ceil(8) * co_groups;
-    let (chunk, nchunks) = weight_chunks(gpu, g.n * g.output[0] * g.output[1], groups, 128);
+    let t = tex_tiling(g, cpad, target_tiles(gpu, 128));
+    let (groups, chunk, nchunks) = (t.groups, t.chunk, t.nchunks);
     let part = gpu.scratch(&[nchunks, taps, cpad, copad])?;
     let tiles = nchunks * groups;
     let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, total: tiles as u32, ..params(g, cpad) };
     let args = [xp.arg(), dyp.arg(), Arg::W(&part)];
     // One or two dy texels a position instead of four where there are at most 4 or 8 outputs.
-    let entry = match (g.co, w3) {
+    let entry = match (g.co, t.w3) {
         (..=4, false) => "conv_fast_backward_weight_tex4",
         (..=4, true) => "conv_fast_backward_weight_tex4_w3",
         (5..=8, false) => "conv_fast_backward_weight_tex8",
+        (_, true) if t.wide => "conv_fast_backward_weight_tex16_w3",
         (_, true) => "conv_fast_backward_weight_tex8_w3",
         _ => "conv_fast_backward_weight_tex",
     };
@@ -76,23 +73,63 @@ pub(super) fn backward_weight_tex(
     dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
 }
 
-/// The chunks of `rows` output rows a weight-gradient dispatch of `per_chunk` tiles a chunk
-/// splits them into, as (rows a chunk, chunks); never more chunks than rows. Each chunk adds a
-/// partial sum that `conv_fast_weight_sum` reads back with storage loads (on lavapipe 22.3 a
-/// loop over the 8 lanes each), so more chunks spread the tiles over more threads but cost
-/// more in the sum. On a CPU adapter the dispatch aims at 16 tiles per CPU thread (lavapipe
-/// runs one thread per CPU): on a 2-core AMD EPYC Zen 3 this took the weight gradients of the
-/// tiny preset's training shapes 5-26% faster (medians) than the 128-256 tiles before (README
-/// "Fewer chunks in the weight gradients") and left the large ones unchanged; elsewhere at
+/// How a texture weight-gradient dispatch of `g` (not folded, `cpad` packed input channels)
+/// tiles its work for `tiles` tiles in all (`target_tiles`).
+#[derive(Debug, PartialEq)]
+struct TexTiling {
+    /// Three W taps a lane (`_w3`), where they read overlapping x: 8 output channels a lane at
+    /// most; past 8 only with 4+ input channel quads (README "Three W taps a lane", an AMD Zen 4).
+    w3: bool,
+    /// 16 output channels a lane (`_tex16_w3`; `w3` past 8 output channels) where its tiles
+    /// still walk 64 steps of 8 columns or more: each x fetch then feeds twice the
+    /// multiply-adds (README "Weight gradients an accumulator at a time": 1.16x on conv3d
+    /// 16->16, 1.08x on conv2d 256->256, 0.91x on conv2d 32->32 on 32x32, whose tiles would walk
+    /// 24 steps, on an AMD EPYC Zen 3).
+    wide: bool,
+    /// Tiles a chunk of output rows, rows a chunk, chunks.
+    groups: usize,
+    chunk: usize,
+    nchunks: usize,
+}
+
+fn tex_tiling(g: &Geometry, cpad: usize, tiles: usize) -> TexTiling {
+    let taps = volume(g.kernel);
+    let rows = g.n * g.output[0] * g.output[1];
+    let w3 = g.kernel[2] == 3 && g.stride[2] == 1 && (g.co <= 8 || cpad >= 16);
+    let tiling = |lane_taps: usize, co_groups: usize, wide: bool| {
+        let groups = (lane_taps * cpad / 4).div_ceil(8) * co_groups;
+        let (chunk, nchunks) = weight_chunks(rows, groups, tiles);
+        TexTiling { w3, wide, groups, chunk, nchunks }
+    };
+    let copad = g.co.div_ceil(16) * 16;
+    if !w3 {
+        return tiling(taps, copad / 16, false);
+    }
+    let wide = tiling(taps / 3, copad / 16, true);
+    if g.co > 8 && wide.chunk * g.output[2].div_ceil(8) >= 64 { wide } else { tiling(taps / 3, g.co.div_ceil(8), false) }
+}
+
+/// Tiles a weight-gradient dispatch aims at: on a CPU adapter 16 per CPU thread (lavapipe runs
+/// one thread per CPU: on a 2-core AMD EPYC Zen 3 this took the weight gradients of the tiny
+/// preset's training shapes 5-26% faster (medians) than the 128-256 tiles before, README
+/// "Fewer chunks in the weight gradients", and left the large ones unchanged); elsewhere
 /// `gpu_tiles`.
-fn weight_chunks(gpu: &Gpu, rows: usize, per_chunk: usize, gpu_tiles: usize) -> (usize, usize) {
+fn target_tiles(gpu: &Gpu, gpu_tiles: usize) -> usize {
     // Read once: on Linux the thread count comes from cgroup files, and this runs per recording.
     static CPU_TILES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
-    let tiles = if gpu.info.device_type == wgpu::DeviceType::Cpu {
+    if gpu.info.device_type == wgpu::DeviceType::Cpu {
         *CPU_TILES.get_or_init(|| 16 * std::thread::available_parallelism().map_or(2, |n| n.get()))
     } else {
         gpu_tiles
-    };
+    }
+}
+
+/// The chunks of `rows` output rows a weight-gradient dispatch of `per_chunk` tiles a chunk
+/// splits them into for about `tiles` tiles, as (rows a chunk, chunks); never more chunks than
+/// rows. Each chunk adds a partial sum that `conv_fast_weight_sum` reads back with storage loads
+/// (on lavapipe 22.3 a loop over the 8 lanes each), so more chunks spread the tiles over more
+/// threads but cost more in the sum.
+fn weight_chunks(rows: usize, per_chunk: usize, tiles: usize) -> (usize, usize) {
     let chunk = rows.div_ceil(tiles.div_ceil(per_chunk).clamp(1, rows));
     (chunk, rows.div_ceil(chunk))
 }
@@ -130,7 +167,7 @@ fn backward_weight_direct(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geome
     // `_w3` walks strips of 16 columns down their rows, `lead` columns early (see the shader).
     let lead = (4 - g.pad[2] % 4) % 4;
     let rows = g.n * g.output[0] * if w3 { (g.output[2] + lead).div_ceil(16) * g.output[1] } else { g.output[1] };
-    let (chunk, nchunks) = weight_chunks(gpu, rows, cols, 256);
+    let (chunk, nchunks) = weight_chunks(rows, cols, target_tiles(gpu, 256));
     let part = gpu.scratch(&[nchunks, volume(g.kernel), cpad, g.co.div_ceil(16) * 16])?;
     let tiles = nchunks * cols;
     let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, total: tiles as u32, ..p };
@@ -173,4 +210,39 @@ pub(crate) fn backward_weight(
     let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, ..params(g, cpad) };
     dispatch(gpu, pass, "conv_fast_backward_weight", p, &[Arg::R(&xp), Arg::R(&dyp), Arg::W(&part)], nchunks * columns)?;
     dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn geometry(n: usize, ci: usize, co: usize, io: [usize; 3], kernel: [usize; 3]) -> Geometry {
+        Geometry { n, ci, co, input: io, output: io, kernel, stride: [1; 3], pad: kernel.map(|k| k / 2), rank: 5 }
+    }
+
+    /// At the 32 tiles of a 2-thread CPU adapter: 16 output channels a lane for the shapes of
+    /// the kernel test `texture_weight_gradient_of_16_output_channels_a_lane`
+    /// (kernels-tests/conv/wide.rs), so that test runs `_tex16_w3` and a narrower rule fails
+    /// here, and for the benchmark's conv3d 16->16 on 32^3; 8 where the tiles would walk fewer
+    /// than 64 steps (conv2d 32->32 on 32x32: 24), and never at 8 output channels or fewer or
+    /// off `_w3`.
+    #[test]
+    fn wide_tiles_where_they_walk_64_steps() {
+        let t3d = geometry(1, 16, 20, [4, 16, 32], [3; 3]);
+        let t2d = geometry(2, 16, 12, [1, 64, 72], [1, 3, 3]);
+        for g in [t3d, t2d, geometry(1, 16, 16, [32; 3], [3; 3])] {
+            let t = tex_tiling(&g, 16, 32);
+            assert!(t.w3 && t.wide, "{g:?}: {t:?}");
+            assert!(t.chunk * g.output[2].div_ceil(8) >= 64 && t.groups * t.nchunks >= 32, "{t:?}");
+        }
+        // 3D 16 -> 20: 5 groups of 8 (9 tap rows x 4 quads) x 2 output groups a chunk, 4 chunks.
+        assert_eq!(tex_tiling(&t3d, 16, 32), TexTiling { w3: true, wide: true, groups: 10, chunk: 16, nchunks: 4 });
+        let narrow = tex_tiling(&geometry(1, 32, 32, [1, 32, 32], [1, 3, 3]), 32, 32);
+        assert!(narrow.w3 && !narrow.wide && narrow.groups == 12, "{narrow:?}");
+        // More threads, shorter chunks: 8 a lane again.
+        assert!(!tex_tiling(&t3d, 16, 256).wide);
+        assert!(!tex_tiling(&Geometry { co: 8, ..t3d }, 16, 32).wide);
+        assert!(!tex_tiling(&Geometry { kernel: [3, 3, 2], ..t3d }, 16, 32).w3);
+        assert!(!tex_tiling(&Geometry { kernel: [3, 3, 2], ..t3d }, 16, 32).wide);
+    }
 }
