@@ -120,15 +120,6 @@ fn put_direct_dw_tap4(b: Acc8, k: DirectColumn, kh: u32, chunk: u32, lane: u32) 
     bpart[o + 3u] = v.w;
 }
 
-// x (in .x) times the 8 channels of dy.
-fn bw_tap1_step(b: Acc8, x: vec4<f32>, d: DyPair) -> Acc8 {
-    return Acc8(b.a0 + x.x * d.lo, b.a1 + x.x * d.hi);
-}
-
-// The same for 5 x 5 taps (H x W: the first layer's 5^3), a tile taking them all: each dy pair
-// fetched feeds 5 tap rows' windows of 4 W taps and their fifth taps alone (17 texel fetches
-// for 200 multiply-adds, against 40 fetches for 320, 120 of them on zero-weight taps), and
-// the tap rows off the grid read zeros from taps4 and tap1 instead of being skipped.
 // Two positions of a step (x: their 4 W taps, d: their dy), each accumulator through both
 // in a row (conv_tex_weight.wgsl's chain8: one load and store for two multiply-adds).
 fn bw_direct_step2(acc: Acc32, x: vec4<f32>, d: DyPair, y: vec4<f32>, e: DyPair) -> Acc32 {
@@ -139,10 +130,16 @@ fn bw_direct_step2(acc: Acc32, x: vec4<f32>, d: DyPair, y: vec4<f32>, e: DyPair)
                             acc.hi[2] + x.z * d.hi + y.z * e.hi, acc.hi[3] + x.w * d.hi + y.w * e.hi));
 }
 
+// The same for a fifth W tap (x.x, y.x) and its 8 channels' accumulators.
 fn bw_tap1_step2(b: Acc8, x: vec4<f32>, d: DyPair, y: vec4<f32>, e: DyPair) -> Acc8 {
     return Acc8(b.a0 + x.x * d.lo + y.x * e.lo, b.a1 + x.x * d.hi + y.x * e.hi);
 }
 
+// The weight gradient for 5 x 5 taps (H x W: the first layer's 5^3), a tile taking them all: each dy pair
+// fetched feeds 5 tap rows' windows of 4 W taps and their fifth taps alone (17 texel fetches
+// for 200 multiply-adds, against 40 fetches for 320, 120 of them on zero-weight taps), and
+// the tap rows off the grid read zeros from taps4 and tap1 instead of being skipped. A lane takes two
+// positions a step, ow and ow + 8, so that each accumulator gets 2 multiply-adds a step.
 @compute @workgroup_size(64)
 fn conv_direct_backward_weight_k5(ids: LaneIds) {
     let tl = lane_tile(ids);

@@ -8,9 +8,10 @@
 // ---- backward weight: lanes = 8 (tap, input channel quad) pairs; dy shared by shuffles ----
 // One subgroup of 8 lanes per (group of 8 pairs, output channel group of 16, chunk of output
 // rows). Lane L owns pair L = tap * cq + q and accumulates dw[16 channels][4 channels] of it
-// over the chunk's positions: per output position it fetches its x texel at the position its
-// tap reaches, while the 16 dy values of that position (the same for every lane) come from
-// texels the 8 lanes fetched for 8 positions at once, handed around with subgroupShuffle.
+// over the chunk's positions, 8 columns a step: it fetches its x texels at the positions its
+// tap reaches, while the 16 dy values of each position (the same for every lane) come from
+// texels the 8 lanes fetched for the step's 8 positions, handed around with subgroupShuffle
+// (dy_t), and each accumulator takes the step's 8 multiply-adds in a row (chain8).
 // Writes part[chunk][tap][cpad][copad] like conv_fast_backward_weight; conv_fast_weight_sum
 // adds the chunks. Params: the dispatch geometry (never folded); cpad of x, co16 of dy; nchunks,
 // chunk (rows per chunk), total = tiles.
@@ -207,7 +208,8 @@ fn conv_fast_backward_weight_tex8(ids: LaneIds) {
 // ---- backward weight, three W taps a lane (kw = 3, sw = 1, not folded) ----------------------
 // As the tiles above, but a lane owns a tap row r = (kd, kh) and channel quad q (pair r * cq +
 // q) with all three of its taps along W, for at most 4 output channels (`_tex4_w3`) or a group
-// of 8 (`_tex8_w3`; src/ops/conv_fast_weight.rs says when). At column stride 1 those taps read overlapping x:
+// of 8 or 16 (`_tex8_w3`, `_tex16_w3`; src/ops/conv_fast_weight.rs, tex_tiling, says when). At
+// column stride 1 those taps read overlapping x:
 // 10 texels serve a step's 8 positions x 3 taps, where the tiles above fetch a texel for every
 // (position, tap), and a texel fetch costs lavapipe tens of FMAs (`rendernet bench
 // --operands`). The part layout is unchanged (the three taps are consecutive rows).
@@ -303,6 +305,8 @@ fn conv_fast_backward_weight_tex8_w3(ids: LaneIds) {
     put_quad3(o, 0u, copad, lo); put_quad3(o, 4u, copad, hi);
 }
 
+// 16 output channels a lane (groups of 16: dy quads 4 cg .. 4 cg + 3): an x fetch feeds twice
+// the multiply-adds of `_tex8_w3`, in half as many tiles.
 @compute @workgroup_size(64)
 fn conv_fast_backward_weight_tex16_w3(ids: LaneIds) {
     let tl = lane_tile(ids);

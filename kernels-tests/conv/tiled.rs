@@ -91,9 +91,9 @@ fn direct_kernels_of_few_input_channels() {
     check(&with(conv3d([5, 5, 5], [2, 2, 2], Padding::Same), 2, 9, [3, 19, 11]), 100);
     // The same at column stride 1, where the fifth W tap falls on every position of a texel.
     check(&with(conv2d([5, 5], [2, 1], Padding::Same), 1, 5, [1, 17, 9]), 104);
-    // Rows of 37 columns: the `_k5` weight gradient's steps of 16 (a lane's two positions ow and
-    // ow + 8), the last step 5 wide.
-    check(&with(conv2d([5, 5], [2, 1], Padding::Same), 1, 6, [1, 9, 37]), 113);
+    // 19 output columns at column stride 2: the `_k5` weight gradient's steps of 16 (a lane's two
+    // positions ow and ow + 8, 16 input columns apart), the last step 3 wide.
+    check(&with(conv2d([5, 5], [2, 2], Padding::Same), 1, 6, [1, 9, 37]), 113);
 }
 
 /// `conv_direct_backward_input_k5s2`, the first layer's input gradient (1 input channel, 5^3
