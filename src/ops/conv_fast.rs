@@ -481,9 +481,9 @@ fn backward_input_k5s2(
     let p = Params { has_bias: b.is_some() as u32, ..params(&t, cpad) };
     let args = [dyp.arg(), wp.arg(), b.map_or(Arg::Absent, Arg::R), Arg::W(dx)];
     // Workgroups: (tiles of 16 columns from x + pw = 2 * (pw / 2), so 15 + pw % 2 past the
-    // last, x tiles of 8 rows; 8 depths; items).
+    // last, x tiles of 16 rows; 8 depths; items).
     let [depth, rows, cols] = g.input;
-    let grid = [((cols + g.pad[2] % 2).div_ceil(16) * rows.div_ceil(8)) as u32, depth.div_ceil(8) as u32, g.n as u32];
+    let grid = [((cols + g.pad[2] % 2).div_ceil(16) * rows.div_ceil(16)) as u32, depth.div_ceil(8) as u32, g.n as u32];
     gpu.dispatch(pass, TEX_SHADER, "conv_direct_backward_input_k5s2", &p, &args, grid)
 }
 
