@@ -258,9 +258,10 @@ fn forward_direct_k5s2(ids: LaneIds, act: bool) {
 // Along H, row r of a tile meets dy row i0 + m through tap kh = 4 + s + r - 2m (s the parity of
 // the tile's first row plus ph; i0 chosen so): the 16 rows share 11 fetched dy rows, 3 taps a
 // row, and the step's weights (2 fetches, 10 shuffles) serve them all (16 rows rather than 8:
-// 1.25x on the first layer, 1->8 on 64^3, on an AMD EPYC Zen 3). Along D the tile's phase bounds the loop. Params: the dispatch geometry of the backward
-// input (input dy: ci its channels, cpad its packed channels; output dx: co = 1), the conv's
-// kernel (5), stride (2) and pads. Weights: the forward's texture (1 input channel: texel (16
+// 1.17x on the first layer, 1->8 on 64^3, on an AMD EPYC Zen 3). Along D the tile's phase
+// bounds the loop. Params: the dispatch geometry of the backward input (input dy: ci its
+// channels, cpad its packed channels; output dx: co = 1), the conv's kernel (5), stride (2)
+// and pads. Weights: the forward's texture (1 input channel: texel (16
 // * (o / 16) + (o / 4) % 4, tap) holds output channels o..o+3).
 
 // W6: one parity's weights of a dy quad at (kd, kw) for tap rows kh = s - 1 .. s + 4, zero off
@@ -319,6 +320,7 @@ fn put_dx(n: u32, pos: u32, ok: bool, v: f32) {
 // Column x's rows oh0.. of (n, od), those inside dx; written out, not looped over an array
 // (which lavapipe would keep in memory and index lane by lane).
 fn put_col8(n: u32, od: u32, oh0: u32, x: i32, a: Col8) {
+    // A tile's second 8 rows may start past the last row (oh0 >= oh): nothing to write.
     let ok = x >= 0 && x < i32(p.ow) && oh0 < p.oh;
     let pos = p.yoff + od * p.ysd + oh0 * p.ysh + u32(x) * p.ysw;
     let rows = p.oh - min(oh0, p.oh);

@@ -26,13 +26,13 @@ fn dy_quads() -> u32 {
 }
 
 // a + sum_j c_j x_j over a step's 8 positions (c: one output channel's dy, positions 0..3 in
-// p, 4..7 in q): one accumulator through 8 multiply-adds in a row, so that it is loaded and
+// lo, 4..7 in hi): one accumulator through 8 multiply-adds in a row, so that it is loaded and
 // stored once for them. lavapipe keeps a tile's accumulators in memory; with one
 // multiply-add per accumulator a position (as the tiles did), a store per multiply-add bounds
 // the tile on AMD Zen (README "Weight gradients an accumulator at a time").
-fn chain8(a: vec4<f32>, p: vec4<f32>, q: vec4<f32>, x0: vec4<f32>, x1: vec4<f32>, x2: vec4<f32>, x3: vec4<f32>,
+fn chain8(a: vec4<f32>, lo: vec4<f32>, hi: vec4<f32>, x0: vec4<f32>, x1: vec4<f32>, x2: vec4<f32>, x3: vec4<f32>,
           x4: vec4<f32>, x5: vec4<f32>, x6: vec4<f32>, x7: vec4<f32>) -> vec4<f32> {
-    return a + p.x * x0 + p.y * x1 + p.z * x2 + p.w * x3 + q.x * x4 + q.y * x5 + q.z * x6 + q.w * x7;
+    return a + lo.x * x0 + lo.y * x1 + lo.z * x2 + lo.w * x3 + hi.x * x4 + hi.y * x5 + hi.z * x6 + hi.w * x7;
 }
 
 // A step's dy of 4 output channels (quad texel g: lane j's is position j's) by channel:
@@ -115,8 +115,8 @@ fn put_dw(o: u32, c: u32, stride: u32, v: vec4<f32>) {
 // 4 output channels' dw over a step (d: their dy by channel, dy_t; x: the 8 positions' x).
 struct Acc4 { a0: vec4<f32>, a1: vec4<f32>, a2: vec4<f32>, a3: vec4<f32> }
 
-fn rows8(a: vec4<f32>, p: vec4<f32>, q: vec4<f32>, x: Rows) -> vec4<f32> {
-    return chain8(a, p, q, x.r0, x.r1, x.r2, x.r3, x.r4, x.r5, x.r6, x.r7);
+fn rows8(a: vec4<f32>, lo: vec4<f32>, hi: vec4<f32>, x: Rows) -> vec4<f32> {
+    return chain8(a, lo, hi, x.r0, x.r1, x.r2, x.r3, x.r4, x.r5, x.r6, x.r7);
 }
 
 fn quad8(a: Acc4, d: DyT, x: Rows) -> Acc4 {
@@ -243,11 +243,11 @@ fn bw_xs10(w: Walk, b: BwLane) -> Xs10 {
 struct Taps3 { k0: vec4<f32>, k1: vec4<f32>, k2: vec4<f32> }
 
 // One output channel's dw at the 3 taps over a step (tap k reaches x texels k .. k + 7).
-fn taps3(a: Taps3, p: vec4<f32>, q: vec4<f32>, x: Xs10) -> Taps3 {
+fn taps3(a: Taps3, lo: vec4<f32>, hi: vec4<f32>, x: Xs10) -> Taps3 {
     let r = x.r;
-    return Taps3(chain8(a.k0, p, q, r.r0, r.r1, r.r2, r.r3, r.r4, r.r5, r.r6, r.r7),
-                 chain8(a.k1, p, q, r.r1, r.r2, r.r3, r.r4, r.r5, r.r6, r.r7, x.x8),
-                 chain8(a.k2, p, q, r.r2, r.r3, r.r4, r.r5, r.r6, r.r7, x.x8, x.x9));
+    return Taps3(chain8(a.k0, lo, hi, r.r0, r.r1, r.r2, r.r3, r.r4, r.r5, r.r6, r.r7),
+                 chain8(a.k1, lo, hi, r.r1, r.r2, r.r3, r.r4, r.r5, r.r6, r.r7, x.x8),
+                 chain8(a.k2, lo, hi, r.r2, r.r3, r.r4, r.r5, r.r6, r.r7, x.x8, x.x9));
 }
 
 // 4 output channels' dw at the 3 taps (d: their dy by channel).

@@ -100,7 +100,8 @@ fn direct_kernels_of_few_input_channels() {
 /// at stride 2) with every phase in one dispatch, forced onto textures: pads of both parities
 /// on every axis (a tile's first row meets its dy rows through taps 4 + s + r - 2m, s = 0 or
 /// 1; a lane's two columns start at x + pw even), tiles of 16 dx rows part-filled (13 and 11
-/// rows: the second half of 8 in part; 27: a second tile of 11), two
+/// rows: the second half of 8 in part; 27: a second tile of 11; 20: a second tile whose second
+/// half starts past the last row, one depth, batch 2), two
 /// workgroups of 8 depths (10), two tiles of 16 columns for 16 (pw odd: the first tile's first
 /// column is off the grid, the second holds the last), 6 and 7 dy channels (two quads, the
 /// second part-filled); and a transposed conv to 1 channel, whose forward it is
@@ -111,6 +112,8 @@ fn direct_backward_input_of_one_channel() {
     check(&with(conv3d([5, 5, 5], [2, 2, 2], explicit([1, 0, 3], [2, 1, 0])), 1, 6, [7, 13, 16]), 110);
     check(&with(conv3d([5, 5, 5], [2, 2, 2], explicit([2, 1, 0], [0, 2, 3])), 1, 7, [10, 11, 13]), 111);
     check(&with(conv3d([5, 5, 5], [2, 2, 2], explicit([0, 1, 2], [1, 2, 2])), 1, 5, [4, 27, 9]), 114);
+    // 20 rows, one depth, batch 2: the second tile's second half starts past the last row.
+    check(&with(conv3d([5, 5, 5], [2, 2, 2], explicit([2, 1, 2], [2, 2, 2])), 1, 5, [1, 20, 9]), 115);
     check(&with(transposed3d([5, 5, 5], [2, 2, 2], explicit([1, 2, 1], [2, 1, 2]), None), 3, 1, [3, 5, 4]), 112);
 }
 

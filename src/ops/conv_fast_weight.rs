@@ -86,9 +86,11 @@ struct TexTiling {
     /// 16->16, 1.08x on conv2d 256->256, 0.91x on conv2d 32->32 on 32x32, whose tiles would walk
     /// 24 steps, on an AMD EPYC Zen 3).
     wide: bool,
-    /// Tiles a chunk of output rows, rows a chunk, chunks.
+    /// Tiles a chunk of output rows.
     groups: usize,
+    /// Output rows a chunk.
     chunk: usize,
+    /// Chunks (partial sums for `conv_fast_weight_sum`).
     nchunks: usize,
 }
 
@@ -228,20 +230,22 @@ mod tests {
     /// off `_w3`.
     #[test]
     fn wide_tiles_where_they_walk_64_steps() {
-        let t3d = geometry(1, 16, 20, [4, 16, 32], [3; 3]);
-        let t2d = geometry(2, 16, 12, [1, 64, 72], [1, 3, 3]);
+        let t3d = geometry(1, 16, 20, [8, 32, 57], [3; 3]);
+        let t2d = geometry(2, 16, 12, [1, 64, 73], [1, 3, 3]);
         let bench = geometry(1, 16, 16, [32; 3], [3; 3]);
         for g in [t3d, t2d, bench] {
             let t = tex_tiling(&g, 16, 32);
             assert!(t.w3 && t.wide, "{g:?}: {t:?}");
             assert!(t.chunk * g.output[2].div_ceil(8) >= 64 && t.groups * t.nchunks >= 32, "{t:?}");
         }
-        // 3D 16 -> 20: 5 groups of 8 (9 tap rows x 4 quads) x 2 output groups a chunk, 4 chunks.
-        assert_eq!(tex_tiling(&t3d, 16, 32), TexTiling { w3: true, wide: true, groups: 10, chunk: 16, nchunks: 4 });
+        // 3D 16 -> 20: 5 groups of 8 (9 tap rows x 4 quads) x 2 output groups a chunk, 4 chunks
+        // of 64 rows; at 256 tiles (a 16-thread CPU adapter) 26 chunks of 10 rows, 80 steps.
+        assert_eq!(tex_tiling(&t3d, 16, 32), TexTiling { w3: true, wide: true, groups: 10, chunk: 64, nchunks: 4 });
+        assert!(tex_tiling(&t3d, 16, 256).wide && tex_tiling(&t3d, 16, 128).wide);
         let narrow = tex_tiling(&geometry(1, 32, 32, [1, 32, 32], [1, 3, 3]), 32, 32);
         assert!(narrow.w3 && !narrow.wide && narrow.groups == 12, "{narrow:?}");
         // More threads, shorter chunks: 8 a lane again.
-        assert!(!tex_tiling(&t3d, 16, 256).wide);
+        assert!(!tex_tiling(&t3d, 16, 512).wide && !tex_tiling(&t2d, 16, 48).wide);
         // 8 output channels: `_tex8_w3`'s groups fill a lane, however long the chunks.
         assert!(!tex_tiling(&Geometry { co: 8, ..bench }, 16, 32).wide);
         assert!(!tex_tiling(&Geometry { kernel: [3, 3, 2], ..t3d }, 16, 32).w3);
