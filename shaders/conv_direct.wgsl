@@ -320,10 +320,11 @@ fn put_dx(n: u32, pos: u32, ok: bool, v: f32) {
 // Column x's rows oh0.. of (n, od), those inside dx; written out, not looped over an array
 // (which lavapipe would keep in memory and index lane by lane).
 fn put_col8(n: u32, od: u32, oh0: u32, x: i32, a: Col8) {
-    // A tile's second 8 rows may start past the last row (oh0 >= oh): nothing to write.
+    // A tile's second 8 rows may start past the last row (oh0 >= oh): nothing to write (rows
+    // then wraps, but every write needs ok).
     let ok = x >= 0 && x < i32(p.ow) && oh0 < p.oh;
     let pos = p.yoff + od * p.ysd + oh0 * p.ysh + u32(x) * p.ysw;
-    let rows = p.oh - min(oh0, p.oh);
+    let rows = p.oh - oh0;
     put_dx(n, pos, ok, a.lo.x);
     put_dx(n, pos + p.ysh, ok && rows > 1u, a.lo.y);
     put_dx(n, pos + 2u * p.ysh, ok && rows > 2u, a.lo.z);

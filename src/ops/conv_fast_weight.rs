@@ -55,10 +55,9 @@ pub(super) fn backward_weight_tex(
     let g = &f.g;
     let taps = volume(g.kernel);
     let t = tex_tiling(g, cpad, target_tiles(gpu, 128));
-    let (groups, chunk, nchunks) = (t.groups, t.chunk, t.nchunks);
-    let part = gpu.scratch(&[nchunks, taps, cpad, copad])?;
-    let tiles = nchunks * groups;
-    let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, fold: f.fold() as u32, total: tiles as u32, ..params(g, cpad) };
+    let part = gpu.scratch(&[t.nchunks, taps, cpad, copad])?;
+    let tiles = t.nchunks * t.groups;
+    let p = Params { nchunks: t.nchunks as u32, chunk: t.chunk as u32, fold: f.fold() as u32, total: tiles as u32, ..params(g, cpad) };
     let args = [xp.arg(), dyp.arg(), Arg::W(&part)];
     // One or two dy texels a position instead of four where there are at most 4 or 8 outputs.
     let entry = match (g.co, t.w3) {
