@@ -190,21 +190,25 @@ fn conv_direct_backward_weight_k5(ids: LaneIds) {
 }
 
 
-// ---- weight gradient, three W taps a lane on the stage (3 x 3 taps at stride 1, <= 8 outputs) --
-// The narrow heads' (16 -> 3 or 5, 3x3) weight gradient without packing x: a lane owns a tap row
-// r = (kd, kh) and one input channel c (pair r * ci + c) with its 3 W taps, for 4 output
-// channels (`_w3`) or 8 (`_w3x8`), and walks strips of 16 output columns down their rows. A
-// step (a row of a strip) fetches the 5 stage texels (20 W voxels: the strip starts `lead`
-// columns early so that they are whole texels) that hold the 18 its 16 positions x 3 taps read,
-// and multiplies them by the positions' dy, which comes as in the tiles of conv_tex_weight.wgsl
-// (a texel a lane, handed around by shuffles). Each accumulator takes 16 multiply-adds a step:
-// on lavapipe a loop-carried value costs several FMAs of its own an iteration (README "One loop
-// per tile"). The channel-quad tiles there need x packed, a texture store per texel (~13x a
-// fetch on lavapipe, `rendernet bench --operands`), where src/ops/conv_pack.rs copies x into
-// the stage with no dispatch when its rows are whole staging rows. Writes part like the tiles
-// (a row's three taps are consecutive rows of it). Params: the conv's geometry; cpad =
-// ceil(ci / 4) * 4; nchunks, chunk (strip rows per chunk: n * od * strips * oh in all), total =
-// tiles.
+// ---- weight gradient, the 3 x 3 taps of a depth a lane on the stage (stride 1, <= 8 outputs) --
+// The narrow heads' (16 -> 3 or 5, 3x3) weight gradient without packing x: a lane owns a kernel
+// depth kd and one input channel c (pair kd * ci + c) with all 9 of its (kh, kw) taps, for 4
+// output channels (`_3x3`) or 8 (`_3x3x8`), and walks strips of 16 output columns down their
+// rows. A step (a row of a strip) fetches, from each of the 3 input rows its taps read, the 5
+// stage texels (20 W voxels: the strip starts `lead` columns early so that they are whole
+// texels) that hold the 18 its 16 positions x 3 W taps read, and multiplies them by the
+// positions' dy, which comes as in the tiles of conv_tex_weight.wgsl (a texel a lane, handed
+// around by shuffles): one set of dy fetches and shuffles serves all 3 rows. With a tap row a
+// lane (as before) they served a third of the multiply-adds, and the 16 -> 3 head at 128 x 128
+// took 1.14x longer on an AMD EPYC Zen 3 (README "A kernel depth a lane"). Fewer lanes: where kd
+// * ci is not a multiple of 8, more of them idle. Each accumulator (9 or 18 vec4) takes its
+// step's 16 multiply-adds in a row (chain16): lavapipe keeps them in memory (README "Weight
+// gradients an accumulator at a time"). The channel-quad tiles there need x packed, a texture
+// store per texel (~13x a fetch on lavapipe, `rendernet bench --operands`), where
+// src/ops/conv_pack.rs copies x into the stage with no dispatch when its rows are whole staging
+// rows. Writes part like the tiles (a row's three taps are consecutive rows of it). Params: the
+// conv's geometry; cpad = ceil(ci / 4) * 4; nchunks, chunk (strip rows per chunk: n * od *
+// strips * oh in all), total = tiles.
 
 // Columns a strip starts before its first output column: pw + lead is a multiple of 4.
 fn stage_lead() -> u32 {
@@ -234,26 +238,25 @@ fn strip_walk_next(w: StripWalk) -> StripWalk {
     return StripWalk(w.n + u32(wd), select(od, 0u, wd), select(s, 0u, ws), select(oh, 0u, wh));
 }
 
-// The lane's pair (BwLane's q: the channel; tap: its row's first tap (kd, kh, 0)) and its
+// The lane's pair (BwLane's q: the channel; tap: its depth's first tap (kd, 0, 0)) and its
 // chunk's strip rows.
 fn stage_lane(tl: vec3<u32>) -> BwLane {
-    let rows = p.kd * p.kh;
-    let groups = (rows * p.ci + 7u) / 8u;
+    let groups = (p.kd * p.ci + 7u) / 8u;
     let pair = (tl.x % groups) * 8u + tl.y;
     let chunk = tl.x / groups;
-    let bp = BwPair(chunk, 0u, pair, min(pair / p.ci, rows - 1u) * 3u, pair % p.ci);
+    let bp = BwPair(chunk, 0u, pair, min(pair / p.ci, p.kd - 1u) * 9u, pair % p.ci);
     let begin = chunk * p.chunk;
     let span = vec2<u32>(begin, min(begin + p.chunk, p.n * p.od * stage_strips() * p.oh));
-    return BwLane(bp, pair < rows * p.ci, tap_axes(bp.tap), span, tl.y, tl.z);
+    return BwLane(bp, pair < p.kd * p.ci, tap_axes(bp.tap), span, tl.y, tl.z);
 }
 
-// W voxels 16 s - lead - pw .. + 19 of the lane's input row at the step (s0.x first): 5 whole
-// texels.
+// W voxels 16 s - lead - pw .. + 19 of the lane's input row at the step for its tap row kh (s0.x
+// first): 5 whole texels.
 struct Xs20 { s0: vec4<f32>, s1: vec4<f32>, s2: vec4<f32>, s3: vec4<f32>, s4: vec4<f32> }
 
-fn stage_xs20(w: StripWalk, b: BwLane) -> Xs20 {
+fn stage_xs20(w: StripWalk, b: BwLane, kh: u32) -> Xs20 {
     let zd = i32(w.od * p.sd + b.k.x) - i32(p.pd);
-    let zh = i32(w.oh + b.k.y) - i32(p.ph);
+    let zh = i32(w.oh + kh) - i32(p.ph);
     let r = stage_row(w.n, b.bp.q, zd, zh);
     let j = i32(4u * w.s) - i32((stage_lead() + p.pw) / 4u);
     return Xs20(stage_row_texel(r, j), stage_row_texel(r, j + 1), stage_row_texel(r, j + 2), stage_row_texel(r, j + 3), stage_row_texel(r, j + 4));
@@ -265,36 +268,55 @@ fn strip_dy(w: StripWalk, b: BwLane, half: u32, quad: u32) -> vec4<f32> {
     return dy_texel(Walk(w.n, w.od, w.oh, 16u * w.s + 8u * half), b.lane - stage_lead(), quad);
 }
 
+// The step's 16 positions' dy of 4 output channels: position j's from lane base + j's texel of
+// g0 (j < 8) or g1.
+struct Dy16 { d: array<vec4<f32>, 16> }
+
+fn dy16(g0: vec4<f32>, g1: vec4<f32>, base: u32) -> Dy16 {
+    return Dy16(array<vec4<f32>, 16>(
+        subgroupShuffle(g0, base), subgroupShuffle(g0, base + 1u), subgroupShuffle(g0, base + 2u), subgroupShuffle(g0, base + 3u),
+        subgroupShuffle(g0, base + 4u), subgroupShuffle(g0, base + 5u), subgroupShuffle(g0, base + 6u), subgroupShuffle(g0, base + 7u),
+        subgroupShuffle(g1, base), subgroupShuffle(g1, base + 1u), subgroupShuffle(g1, base + 2u), subgroupShuffle(g1, base + 3u),
+        subgroupShuffle(g1, base + 4u), subgroupShuffle(g1, base + 5u), subgroupShuffle(g1, base + 6u), subgroupShuffle(g1, base + 7u)));
+}
+
+// The step's dy of quad `quad` (dy16 of the lanes' two texels).
+fn strip_dy16(w: StripWalk, b: BwLane, quad: u32) -> Dy16 {
+    return dy16(strip_dy(w, b, 0u, quad), strip_dy(w, b, 1u, quad), b.base);
+}
+
+// a + sum over the 16 positions j of x_j d_j, x_j the j-th of the voxels v0.x .. v3.w: one
+// accumulator through 16 multiply-adds in a row.
+fn chain16(a: vec4<f32>, v0: vec4<f32>, v1: vec4<f32>, v2: vec4<f32>, v3: vec4<f32>, d: Dy16) -> vec4<f32> {
+    return a + v0.x * d.d[0] + v0.y * d.d[1] + v0.z * d.d[2] + v0.w * d.d[3]
+             + v1.x * d.d[4] + v1.y * d.d[5] + v1.z * d.d[6] + v1.w * d.d[7]
+             + v2.x * d.d[8] + v2.y * d.d[9] + v2.z * d.d[10] + v2.w * d.d[11]
+             + v3.x * d.d[12] + v3.y * d.d[13] + v3.z * d.d[14] + v3.w * d.d[15];
+}
+
+// Voxels 1..4 and 2..5 of the 8 in texels a, b.
+fn shift1(a: vec4<f32>, b: vec4<f32>) -> vec4<f32> {
+    return vec4<f32>(a.y, a.z, a.w, b.x);
+}
+
+fn shift2(a: vec4<f32>, b: vec4<f32>) -> vec4<f32> {
+    return vec4<f32>(a.z, a.w, b.x, b.y);
+}
+
 // The three W taps' accumulators of 4 output channels.
 struct Acc3 { t0: vec4<f32>, t1: vec4<f32>, t2: vec4<f32> }
 
-// Position j of the step: taps 0, 1, 2 read x0, x1, x2; d its dy.
-fn mac3(a: Acc3, x0: f32, x1: f32, x2: f32, d: vec4<f32>) -> Acc3 {
-    return Acc3(a.t0 + x0 * d, a.t1 + x1 * d, a.t2 + x2 * d);
+// A tap row's three W taps over the step (tap k reads voxels k .. k + 15 of the 20).
+fn row16(a: Acc3, x: Xs20, d: Dy16) -> Acc3 {
+    return Acc3(chain16(a.t0, x.s0, x.s1, x.s2, x.s3, d),
+                chain16(a.t1, shift1(x.s0, x.s1), shift1(x.s1, x.s2), shift1(x.s2, x.s3), shift1(x.s3, x.s4), d),
+                chain16(a.t2, shift2(x.s0, x.s1), shift2(x.s1, x.s2), shift2(x.s2, x.s3), shift2(x.s3, x.s4), d));
 }
 
-// 8 positions on the 12 voxels from v0.x and the dy texels the lanes fetched (g, shuffled from
-// lane base + j for position j).
-fn mac3_8(a: Acc3, v0: vec4<f32>, v1: vec4<f32>, v2: vec4<f32>, g: vec4<f32>, base: u32) -> Acc3 {
-    var r = mac3(a, v0.x, v0.y, v0.z, subgroupShuffle(g, base));
-    r = mac3(r, v0.y, v0.z, v0.w, subgroupShuffle(g, base + 1u));
-    r = mac3(r, v0.z, v0.w, v1.x, subgroupShuffle(g, base + 2u));
-    r = mac3(r, v0.w, v1.x, v1.y, subgroupShuffle(g, base + 3u));
-    r = mac3(r, v1.x, v1.y, v1.z, subgroupShuffle(g, base + 4u));
-    r = mac3(r, v1.y, v1.z, v1.w, subgroupShuffle(g, base + 5u));
-    r = mac3(r, v1.z, v1.w, v2.x, subgroupShuffle(g, base + 6u));
-    return mac3(r, v1.w, v2.x, v2.y, subgroupShuffle(g, base + 7u));
-}
-
-// The step's 16 positions: the first 8 on dy texels g0, the next on g1.
-fn mac3_16(a: Acc3, x: Xs20, g0: vec4<f32>, g1: vec4<f32>, base: u32) -> Acc3 {
-    return mac3_8(mac3_8(a, x.s0, x.s1, x.s2, g0, base), x.s2, x.s3, x.s4, g1, base);
-}
-
-// dw of the lane's channel at its row's three taps, output channels col..col + 3.
-fn put_stage_dw3(b: BwLane, a: Acc3, col: u32) {
+// dw of the lane's channel at tap row kh's three taps, output channels col..col + 3.
+fn put_row_dw3(b: BwLane, kh: u32, a: Acc3, col: u32) {
     let copad = p.co16 * 16u;
-    let o = ((b.bp.chunk * p.kd * p.kh * p.kw + b.bp.tap) * p.cpad + b.bp.q) * copad + col;
+    let o = ((b.bp.chunk * p.kd * p.kh * p.kw + b.bp.tap + 3u * kh) * p.cpad + b.bp.q) * copad + col;
     let next = p.cpad * copad;
     put_dw(o, 0u, 1u, a.t0);
     put_dw(o + next, 0u, 1u, a.t1);
@@ -302,35 +324,40 @@ fn put_stage_dw3(b: BwLane, a: Acc3, col: u32) {
 }
 
 @compute @workgroup_size(64)
-fn conv_direct_backward_weight_w3(ids: LaneIds) {
+fn conv_direct_backward_weight_3x3(ids: LaneIds) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
     let b = stage_lane(tl);
-    var a: Acc3;
+    var a0: Acc3; var a1: Acc3; var a2: Acc3;
     var w = strip_walk_from(b.span.x);
     for (var i = b.span.x; i < b.span.y; i++) {
-        a = mac3_16(a, stage_xs20(w, b), strip_dy(w, b, 0u, 0u), strip_dy(w, b, 1u, 0u), b.base);
+        let d = strip_dy16(w, b, 0u);
+        a0 = row16(a0, stage_xs20(w, b, 0u), d);
+        a1 = row16(a1, stage_xs20(w, b, 1u), d);
+        a2 = row16(a2, stage_xs20(w, b, 2u), d);
         w = strip_walk_next(w);
     }
     if (!b.live) { return; }
-    put_stage_dw3(b, a, 0u);
+    put_row_dw3(b, 0u, a0, 0u); put_row_dw3(b, 1u, a1, 0u); put_row_dw3(b, 2u, a2, 0u);
 }
 
 @compute @workgroup_size(64)
-fn conv_direct_backward_weight_w3x8(ids: LaneIds) {
+fn conv_direct_backward_weight_3x3x8(ids: LaneIds) {
     let tl = lane_tile(ids);
     if (tl.x >= p.total) { return; }
     let b = stage_lane(tl);
-    var lo: Acc3;
-    var hi: Acc3;
+    var a0: Acc3; var a1: Acc3; var a2: Acc3;
+    var h0: Acc3; var h1: Acc3; var h2: Acc3;
     var w = strip_walk_from(b.span.x);
     for (var i = b.span.x; i < b.span.y; i++) {
-        let x = stage_xs20(w, b);
-        lo = mac3_16(lo, x, strip_dy(w, b, 0u, 0u), strip_dy(w, b, 1u, 0u), b.base);
-        hi = mac3_16(hi, x, strip_dy(w, b, 0u, 1u), strip_dy(w, b, 1u, 1u), b.base);
+        let x0 = stage_xs20(w, b, 0u); let x1 = stage_xs20(w, b, 1u); let x2 = stage_xs20(w, b, 2u);
+        let d = strip_dy16(w, b, 0u);
+        a0 = row16(a0, x0, d); a1 = row16(a1, x1, d); a2 = row16(a2, x2, d);
+        let e = strip_dy16(w, b, 1u);
+        h0 = row16(h0, x0, e); h1 = row16(h1, x1, e); h2 = row16(h2, x2, e);
         w = strip_walk_next(w);
     }
     if (!b.live) { return; }
-    put_stage_dw3(b, lo, 0u);
-    put_stage_dw3(b, hi, 4u);
+    put_row_dw3(b, 0u, a0, 0u); put_row_dw3(b, 1u, a1, 0u); put_row_dw3(b, 2u, a2, 0u);
+    put_row_dw3(b, 0u, h0, 4u); put_row_dw3(b, 1u, h1, 4u); put_row_dw3(b, 2u, h2, 4u);
 }

@@ -314,7 +314,7 @@ fn a_training_run_packs_each_conv_input_once_for_forward_and_weight_gradient() {
 // A training run's narrow 3x3 head 64 wide (conv2d 16 -> 3 -> mse, a Phong head's shape): where
 // `Auto` runs its forward on the unpacked input (a CPU adapter where that measured faster), the
 // forward reads x from its stage texture, copied in, and keeps it, and the weight gradient
-// (`conv_direct_backward_weight_w3`) reads it there: one copy into a texture fewer than a run
+// (`conv_direct_backward_weight_3x3`) reads it there: one copy into a texture fewer than a run
 // that keeps nothing, with gradients and parameters equal to the bit. Elsewhere both runs copy
 // (or pack) alike.
 #[test]

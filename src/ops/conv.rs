@@ -470,7 +470,7 @@ pub(crate) fn operands(gpu: &Gpu, kernel: ConvKernel) -> conv_fast::Operands {
 /// would not be kept for the weight gradient (a training step's texture packing serves the
 /// forward and the weight gradient, so skipping it in the forward saves nothing there) or the
 /// forward reads x from its stage (`staged`: `conv_pack::stage_in_place`), which the weight gradient
-/// then reads too, kept (`conv_direct_backward_weight_w3`).
+/// then reads too, kept (`conv_direct_backward_weight_3x3`).
 fn uses_nchw(kernel: ConvKernel, gpu: &Gpu, g: &Geometry, staged: bool) -> bool {
     conv_nchw::fits(g) && (kernel == ConvKernel::Nchw || (kernel == ConvKernel::Auto && (!gpu.keeping_packs() || staged) && conv_nchw::wins(gpu, staged)))
 }

@@ -135,14 +135,14 @@ fn weight_chunks(rows: usize, per_chunk: usize, tiles: usize) -> (usize, usize) 
     (chunk, rows.div_ceil(chunk))
 }
 
-/// Whether `g` has the shape of `conv_direct_backward_weight_w3`: 3 x 3 taps along H and W at
+/// Whether `g` has the shape of `conv_direct_backward_weight_3x3`: 3 x 3 taps along H and W at
 /// stride 1 there, at most 8 output channels (the narrow heads).
 fn w3_shape(g: &Geometry) -> bool {
     g.kernel[1..] == [3, 3] && g.stride[1..] == [1, 1] && g.co <= 8
 }
 
 /// Whether the weight gradient of `g` (not folded) reads x in place in its stage
-/// (`conv_direct_backward_weight_w3`) rather than packed by channel quads: a [`w3_shape`] whose x
+/// (`conv_direct_backward_weight_3x3`) rather than packed by channel quads: a [`w3_shape`] whose x
 /// is copied into the stage with no dispatch and fits it (`stage_in_place`). On an AMD Zen 4 the
 /// 16 -> 3 head at 128 x 128 took 1.02 against 1.72 ms so, and 1.94 with the stage written by a
 /// dispatch instead (README "The heads on x in place").
@@ -157,15 +157,15 @@ fn backward_weight_direct(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geome
     let cpad = g.ci.div_ceil(4) * 4;
     let p = params(g, cpad);
     let stage = stage_x(gpu, pass, g, x, &p)?;
-    // Tiles a chunk: of 8 (tap row, channel) pairs (`_w3`), or of 8 output columns per
+    // Tiles a chunk: of 8 (kernel depth, channel) pairs (`_3x3`), or of 8 output columns per
     // column of taps; 5 x 5 taps (the first layer): `_k5` tiles take them all, sharing each dy fetch.
     let k5 = g.kernel[1] == 5 && g.kernel[2] == 5;
     let (entry, cols) = match (w3, k5) {
-        (true, _) => (if g.co <= 4 { "conv_direct_backward_weight_w3" } else { "conv_direct_backward_weight_w3x8" }, (g.kernel[0] * g.kernel[1] * g.ci).div_ceil(8)),
+        (true, _) => (if g.co <= 4 { "conv_direct_backward_weight_3x3" } else { "conv_direct_backward_weight_3x3x8" }, (g.kernel[0] * g.ci).div_ceil(8)),
         (false, true) => ("conv_direct_backward_weight_k5", g.kernel[0] * g.ci * g.co.div_ceil(8)),
         (false, false) => ("conv_direct_backward_weight", g.kernel[0] * g.ci * g.kernel[1] * g.kernel[2].div_ceil(4) * g.co.div_ceil(8)),
     };
-    // `_w3` walks strips of 16 columns down their rows, `lead` columns early (see the shader).
+    // `_3x3` walks strips of 16 columns down their rows, `lead` columns early (see the shader).
     let lead = (4 - g.pad[2] % 4) % 4;
     let rows = g.n * g.output[0] * if w3 { (g.output[2] + lead).div_ceil(16) * g.output[1] } else { g.output[1] };
     let (chunk, nchunks) = weight_chunks(rows, cols, target_tiles(gpu, 256));
