@@ -83,7 +83,9 @@ struct TexTiling {
     /// still walk 64 steps of 8 columns or more: each x fetch then feeds twice the
     /// multiply-adds (README "Weight gradients an accumulator at a time": 1.16x on conv3d
     /// 16->16, 1.08x on conv2d 256->256, 0.91x on conv2d 32->32 on 32x32, whose tiles would walk
-    /// 24 steps, on an AMD EPYC Zen 3).
+    /// 24 steps, on an AMD EPYC Zen 3), and whose rows take an even count of those steps: it
+    /// walks steps of 16 columns, and a row of an odd count would multiply a last half step of
+    /// zeros (README "Steps of 16 columns").
     wide: bool,
     /// Tiles a chunk of output rows.
     groups: usize,
@@ -107,7 +109,8 @@ fn tex_tiling(g: &Geometry, cpad: usize, tiles: usize) -> TexTiling {
         return tiling(taps, copad / 16, false);
     }
     let wide = tiling(taps / 3, copad / 16, true);
-    if g.co > 8 && wide.chunk * g.output[2].div_ceil(8) >= 64 { wide } else { tiling(taps / 3, g.co.div_ceil(8), false) }
+    let steps8 = g.output[2].div_ceil(8);
+    if g.co > 8 && steps8 % 2 == 0 && wide.chunk * steps8 >= 64 { wide } else { tiling(taps / 3, g.co.div_ceil(8), false) }
 }
 
 /// Tiles a weight-gradient dispatch aims at: on a CPU adapter 16 per CPU thread (lavapipe runs
@@ -247,6 +250,11 @@ mod tests {
         assert!(!tex_tiling(&t3d, 16, 512).wide && !tex_tiling(&t2d, 16, 48).wide);
         // 8 output channels: `_tex8_w3`'s groups fill a lane, however long the chunks.
         assert!(!tex_tiling(&Geometry { co: 8, ..bench }, 16, 32).wide);
+        // Rows of 3 steps of 8 columns (17-24 wide): 2 steps of 16 would add a third.
+        for ow in [17, 24, 40] {
+            let odd = Geometry { input: [8, 64, ow], output: [8, 64, ow], ..bench };
+            assert!(!tex_tiling(&odd, 16, 32).wide && tex_tiling(&Geometry { input: [8, 64, ow + 8], output: [8, 64, ow + 8], ..odd }, 16, 32).wide);
+        }
         assert!(!tex_tiling(&Geometry { kernel: [3, 3, 2], ..t3d }, 16, 32).w3);
         assert!(!tex_tiling(&Geometry { kernel: [3, 3, 2], ..t3d }, 16, 32).wide);
     }
