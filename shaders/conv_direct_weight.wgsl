@@ -78,9 +78,9 @@ fn put_direct_dw(acc: Acc32, k: DirectColumn, kh: u32, chunk: u32, lane: u32) {
     bpart[o + 3u] = mine.w;
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(8)
 fn conv_direct_backward_weight(ids: LaneIds) {
-    let tl = lane_tile(ids);
+    let tl = lane_tile1(ids);
     if (tl.x >= p.total) { return; }
     let lane = tl.y;
     let cols = p.kd * p.ci * p.kh * ((p.kw + 3u) / 4u) * ((p.co + 7u) / 8u);
@@ -140,9 +140,9 @@ fn bw_tap1_step2(b: Acc8, x: vec4<f32>, d: DyPair, y: vec4<f32>, e: DyPair) -> A
 // for 200 multiply-adds, against 40 fetches for 320, 120 of them on zero-weight taps), and
 // the tap rows off the grid read zeros from taps4 and tap1 instead of being skipped. A lane takes two
 // positions a step, ow and ow + 8, so that each accumulator gets 2 multiply-adds a step.
-@compute @workgroup_size(64)
+@compute @workgroup_size(8)
 fn conv_direct_backward_weight_k5(ids: LaneIds) {
-    let tl = lane_tile(ids);
+    let tl = lane_tile1(ids);
     if (tl.x >= p.total) { return; }
     let lane = tl.y;
     let cols = p.kd * p.ci * ((p.co + 7u) / 8u);
@@ -323,9 +323,9 @@ fn put_row_dw3(b: BwLane, kh: u32, a: Acc3, col: u32) {
     put_dw(o + 2u * next, 0u, 1u, a.t2);
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(8)
 fn conv_direct_backward_weight_3x3(ids: LaneIds) {
-    let tl = lane_tile(ids);
+    let tl = lane_tile1(ids);
     if (tl.x >= p.total) { return; }
     let b = stage_lane(tl);
     var a0: Acc3; var a1: Acc3; var a2: Acc3;
@@ -341,9 +341,9 @@ fn conv_direct_backward_weight_3x3(ids: LaneIds) {
     put_row_dw3(b, 0u, a0, 0u); put_row_dw3(b, 1u, a1, 0u); put_row_dw3(b, 2u, a2, 0u);
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(8)
 fn conv_direct_backward_weight_3x3x8(ids: LaneIds) {
-    let tl = lane_tile(ids);
+    let tl = lane_tile1(ids);
     if (tl.x >= p.total) { return; }
     let b = stage_lane(tl);
     var a0: Acc3; var a1: Acc3; var a2: Acc3;

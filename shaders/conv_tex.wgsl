@@ -104,6 +104,11 @@ fn lane_tile(i: LaneIds) -> vec3<u32> {
     return vec3<u32>((i.wg.x + i.wg.y * i.nwg.x) * 8u + i.li / 8u, i.sid & 7u, i.sid & ~7u);
 }
 
+// lane_tile for workgroups of one tile (8 invocations).
+fn lane_tile1(i: LaneIds) -> vec3<u32> {
+    return vec3<u32>(i.wg.x + i.wg.y * i.nwg.x, i.sid & 7u, i.sid & ~7u);
+}
+
 // Forward tile `t` (tiles of 8 columns x 8 rows, per item, channel group and depth): item n,
 // output channel group cg, depth od, first row oh0, and lane `lane`'s column ow.
 struct FwdTile { n: u32, cg: u32, od: u32, oh0: u32, ow: u32 }

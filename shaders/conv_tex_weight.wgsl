@@ -135,9 +135,9 @@ fn dy_step(w: Walk, b: BwLane, quad: u32) -> DyT {
     return dy_t(dy_texel(w, b.lane, quad), b.base);
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(8)
 fn conv_fast_backward_weight_tex(ids: LaneIds) {
-    let tl = lane_tile(ids);
+    let tl = lane_tile1(ids);
     if (tl.x >= p.total) { return; }
     let b = bw_lane(tl);
     let q0 = b.bp.cg * 4u;
@@ -163,9 +163,9 @@ fn conv_fast_backward_weight_tex(ids: LaneIds) {
 // ---- backward weight, narrow (co <= 4): as above with one dy texel per position ----------
 // dy packed with 4 channels (one quad per voxel); each lane accumulates dw[4 channels][4
 // channels] of its (tap, quad) pair; part keeps the 16-column layout (columns 0..3 written).
-@compute @workgroup_size(64)
+@compute @workgroup_size(8)
 fn conv_fast_backward_weight_tex4(ids: LaneIds) {
-    let tl = lane_tile(ids);
+    let tl = lane_tile1(ids);
     if (tl.x >= p.total) { return; }
     // co16 = 1: channel group 0.
     let b = bw_lane(tl);
@@ -185,9 +185,9 @@ fn conv_fast_backward_weight_tex4(ids: LaneIds) {
 // packing serves both gradients), where the 16-channel kernel above would multiply 8-11 zero
 // channels of 16; each lane accumulates dw[8 channels][4 channels] of its (tap, quad) pair;
 // part keeps the 16-column layout (columns 0..7 written).
-@compute @workgroup_size(64)
+@compute @workgroup_size(8)
 fn conv_fast_backward_weight_tex8(ids: LaneIds) {
-    let tl = lane_tile(ids);
+    let tl = lane_tile1(ids);
     if (tl.x >= p.total) { return; }
     // co16 = 1: channel group 0.
     let b = bw_lane(tl);
@@ -221,11 +221,13 @@ fn bw_lane3(tl: vec3<u32>) -> BwLane {
 fn bw_lane3_of(tl: vec3<u32>, width: u32) -> BwLane {
     let rows = p.kd * p.kh;
     let cq = p.cpad / 4u;
-    let groups = (rows * cq + 7u) / 8u;
-    let r = tl.x / groups;
-    let pair = (tl.x % groups) * 8u + tl.y;
     // Output channel groups of `width` (one for the narrow tiles): cg is the group.
     let per = (p.co + width - 1u) / width;
+    // Groups of 8 pairs a chunk and channel group: all of them, or (`_tex16_w3` beside
+    // `_tex16_w3_halves`) the whole ones only.
+    let groups = p.total / (p.nchunks * per);
+    let r = tl.x / groups;
+    let pair = (tl.x % groups) * 8u + tl.y;
     let bp = BwPair(r / per, r % per, pair, min(pair / cq, rows - 1u) * 3u, pair % cq);
     return BwLane(bp, pair < rows * cq, tap_axes(bp.tap), chunk_rows(bp.chunk), tl.y, tl.z);
 }
@@ -276,9 +278,9 @@ fn put_quad3(o: u32, c: u32, stride: u32, a: Quad3) {
     put_dw4(o + 2u * next, c, stride, Acc4(a.c0.k2, a.c1.k2, a.c2.k2, a.c3.k2));
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(8)
 fn conv_fast_backward_weight_tex4_w3(ids: LaneIds) {
-    let tl = lane_tile(ids);
+    let tl = lane_tile1(ids);
     if (tl.x >= p.total) { return; }
     // co16 = 1: channel group 0.
     let b = bw_lane3(tl);
@@ -293,9 +295,9 @@ fn conv_fast_backward_weight_tex4_w3(ids: LaneIds) {
     put_quad3(bw_part_row(b) * 16u, 0u, 16u, acc);
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(8)
 fn conv_fast_backward_weight_tex8_w3(ids: LaneIds) {
-    let tl = lane_tile(ids);
+    let tl = lane_tile1(ids);
     if (tl.x >= p.total) { return; }
     // Output channels 8 cg .. 8 cg + 7: dy quads 2 cg, 2 cg + 1.
     let b = bw_lane3(tl);
@@ -325,9 +327,9 @@ fn quad3_16(a: Quad3, w: Walk, v: Walk, b: BwLane, quad: u32, x: Xs10, y: Xs10) 
     return quad3(quad3(a, dy_step(w, b, quad), x), dy_step(v, b, quad), y);
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(8)
 fn conv_fast_backward_weight_tex16_w3(ids: LaneIds) {
-    let tl = lane_tile(ids);
+    let tl = lane_tile1(ids);
     if (tl.x >= p.total) { return; }
     let b = bw_lane3_of(tl, 16u);
     let q0 = 4u * b.bp.cg;
@@ -345,6 +347,67 @@ fn conv_fast_backward_weight_tex16_w3(ids: LaneIds) {
         w = walk_next_by(w, 16u);
     }
     if (!b.live) { return; }
+    let copad = p.co16 * 16u;
+    let o = bw_part_row(b) * copad + 4u * q0;
+    put_quad3(o, 0u, copad, a0); put_quad3(o, 4u, copad, a1);
+    put_quad3(o, 8u, copad, a2); put_quad3(o, 12u, copad, a3);
+}
+
+// ---- the same past the whole groups: two lanes a pair, a column half each -------------------
+// Where a chunk's (tap row, quad) pairs leave 1-4 past their last whole group of 8 (3^3 taps on
+// 16 channels: 36 pairs, 4 past 32), a tile of `_tex16_w3` over them would leave half its lanes
+// or more idle. Here lane L takes pair 8 g + L % 4 (g whole groups) and, of each step of 16
+// columns, the 8 of half L / 4: its x at those columns, and the dy of those positions (every
+// lane fetches both halves' dy texels, as `_tex16_w3` does, and takes its half's after the
+// shuffles). Lanes L and L ^ 4 then add their sums. One tile a chunk and output channel group;
+// `_tex16_w3` takes the whole groups in a dispatch of its own (src/ops/conv_fast_weight.rs).
+fn bw_lane3_halves(tl: vec3<u32>) -> BwLane {
+    let rows = p.kd * p.kh;
+    let cq = p.cpad / 4u;
+    let per = (p.co + 15u) / 16u;
+    let pair = (rows * cq / 8u) * 8u + tl.y % 4u;
+    let bp = BwPair(tl.x / per, tl.x % per, pair, min(pair / cq, rows - 1u) * 3u, pair % cq);
+    return BwLane(bp, pair < rows * cq, tap_axes(bp.tap), chunk_rows(bp.chunk), tl.y, tl.z);
+}
+
+// a where `first`, else b.
+fn dyt_select(b: DyT, a: DyT, first: bool) -> DyT {
+    return DyT(array<vec4<f32>, 4>(select(b.lo[0], a.lo[0], first), select(b.lo[1], a.lo[1], first),
+                                   select(b.lo[2], a.lo[2], first), select(b.lo[3], a.lo[3], first)),
+               array<vec4<f32>, 4>(select(b.hi[0], a.hi[0], first), select(b.hi[1], a.hi[1], first),
+                                   select(b.hi[2], a.hi[2], first), select(b.hi[3], a.hi[3], first)));
+}
+
+// The lane's sums plus those of lane ^ 4 (the pair's other half).
+fn taps3_halves(a: Taps3) -> Taps3 {
+    return Taps3(a.k0 + subgroupShuffleXor(a.k0, 4u), a.k1 + subgroupShuffleXor(a.k1, 4u), a.k2 + subgroupShuffleXor(a.k2, 4u));
+}
+
+fn quad3_halves(a: Quad3) -> Quad3 {
+    return Quad3(taps3_halves(a.c0), taps3_halves(a.c1), taps3_halves(a.c2), taps3_halves(a.c3));
+}
+
+@compute @workgroup_size(8)
+fn conv_fast_backward_weight_tex16_w3_halves(ids: LaneIds) {
+    let tl = lane_tile1(ids);
+    if (tl.x >= p.total) { return; }
+    let b = bw_lane3_halves(tl);
+    let first = tl.y < 4u;
+    let q0 = 4u * b.bp.cg;
+    var a0: Quad3; var a1: Quad3; var a2: Quad3; var a3: Quad3;
+    var w = walk_from(b.span.x);
+    let steps = walk_steps_by(b.span, 16u);
+    for (var i = 0u; i < steps; i++) {
+        let v = Walk(w.n, w.od, w.oh, w.ow0 + 8u);
+        let x = bw_xs10(Walk(w.n, w.od, w.oh, select(w.ow0 + 8u, w.ow0, first)), b);
+        a0 = quad3(a0, dyt_select(dy_step(v, b, q0), dy_step(w, b, q0), first), x);
+        a1 = quad3(a1, dyt_select(dy_step(v, b, q0 + 1u), dy_step(w, b, q0 + 1u), first), x);
+        a2 = quad3(a2, dyt_select(dy_step(v, b, q0 + 2u), dy_step(w, b, q0 + 2u), first), x);
+        a3 = quad3(a3, dyt_select(dy_step(v, b, q0 + 3u), dy_step(w, b, q0 + 3u), first), x);
+        w = walk_next_by(w, 16u);
+    }
+    a0 = quad3_halves(a0); a1 = quad3_halves(a1); a2 = quad3_halves(a2); a3 = quad3_halves(a3);
+    if (!b.live || !first) { return; }
     let copad = p.co16 * 16u;
     let o = bw_part_row(b) * copad + 4u * q0;
     put_quad3(o, 0u, copad, a0); put_quad3(o, 4u, copad, a1);

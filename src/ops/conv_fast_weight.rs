@@ -68,8 +68,38 @@ pub(super) fn backward_weight_tex(
         (_, true) => "conv_fast_backward_weight_tex8_w3",
         _ => "conv_fast_backward_weight_tex",
     };
-    gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
+    // `_tex16_w3`'s pairs past its whole groups, where 1-4: `_halves` takes them, two lanes a
+    // pair, one tile a chunk and output channel group (see the shader).
+    let left = if t.wide { leftover_pairs(g, cpad) } else { 0 };
+    let per = copad / 16;
+    let whole = if left > 0 { tiles - t.nchunks * per } else { tiles };
+    if whole > 0 {
+        gpu.dispatch(pass, TEX_SHADER, entry, &Params { total: whole as u32, ..p }, &args, tile_grid(whole)?)?;
+    }
+    if left > 0 {
+        let halves = t.nchunks * per;
+        let entry = "conv_fast_backward_weight_tex16_w3_halves";
+        gpu.dispatch(pass, TEX_SHADER, entry, &Params { total: halves as u32, ..p }, &args, tile_grid(halves)?)?;
+    }
     dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
+}
+
+/// The grid of a weight-gradient dispatch of `tiles` tiles: a workgroup a tile (8 invocations,
+/// `lane_tile1`). lavapipe hands whole workgroups to its threads, and these dispatches have
+/// few tiles (~16 a thread, `target_tiles`): at 8 tiles a workgroup, the 35 tiles of conv3d
+/// 16->16 made 5 workgroups (four of 8 tiles, one of 3), so one of 2 threads took 19 tiles or
+/// more, against 17.5 for an even share (README "A workgroup a tile").
+fn tile_grid(tiles: usize) -> Result<[u32; 3]> {
+    grid_1d(tiles as u64 * 8, 8)
+}
+
+/// The (tap row, channel quad) pairs of a `_w3` tiling of `g` past its whole groups of 8, where
+/// they are 1-4 (a tile of them would leave half its lanes or more idle), else 0: 4 for 3^3
+/// taps on 16 channels (36 pairs) or 3x3 on 16 (12). README "Two lanes a pair past the whole
+/// groups".
+fn leftover_pairs(g: &Geometry, cpad: usize) -> usize {
+    let left = g.kernel[0] * g.kernel[1] * cpad / 4 % 8;
+    if left <= 4 { left } else { 0 }
 }
 
 /// How a texture weight-gradient dispatch of `g` (not folded, `cpad` packed input channels)
@@ -176,7 +206,7 @@ fn backward_weight_direct(gpu: &Gpu, pass: &mut wgpu::ComputePass<'_>, g: &Geome
     let tiles = nchunks * cols;
     let p = Params { nchunks: nchunks as u32, chunk: chunk as u32, total: tiles as u32, ..p };
     let args = [Arg::ReadStorageTexture(&stage, wgpu::TextureViewDimension::D3), dyp.arg(), Arg::W(&part)];
-    gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, grid_1d(tiles as u64 * 8, 64)?)?;
+    gpu.dispatch(pass, TEX_SHADER, entry, &p, &args, tile_grid(tiles)?)?;
     dispatch(gpu, pass, "conv_fast_weight_sum", p, &[Arg::R(&part), Arg::W(dw)], dw.numel())
 }
 
