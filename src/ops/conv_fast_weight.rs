@@ -260,6 +260,22 @@ mod tests {
     /// here, and for the benchmark's conv3d 16->16 on 32^3; 8 where the tiles would walk fewer
     /// than 64 steps (conv2d 32->32 on 32x32: 24), and never at 8 output channels or fewer or
     /// off `_w3`.
+    /// `_tex16_w3_halves` takes the 4 pairs past 32 of 3^3 taps on 16 channels (36) and past 8
+    /// of 3x3 on 16 (12); none of 3x3 on 32 (24, whole groups), nor 5 past 40 of 3^3 on 20
+    /// (a tile of them leaves 3 lanes idle, fewer than halves would).
+    #[test]
+    fn halves_take_1_to_4_pairs_past_the_whole_groups() {
+        let g = |ci: usize, kernel: [usize; 3]| geometry(1, ci, 16, [8, 32, 32], kernel);
+        assert_eq!(leftover_pairs(&g(16, [3; 3]), 16), 4);
+        assert_eq!(leftover_pairs(&g(16, [1, 3, 3]), 16), 4);
+        assert_eq!(leftover_pairs(&g(32, [1, 3, 3]), 32), 0);
+        assert_eq!(leftover_pairs(&g(20, [3; 3]), 20), 0);
+        assert_eq!(leftover_pairs(&g(4, [1, 3, 3]), 4), 3);
+        // kernels-tests/conv/wide.rs's third case: 2 past 16, and `_tex16_w3` runs.
+        let third = geometry(2, 24, 12, [1, 96, 64], [1, 3, 3]);
+        assert!(leftover_pairs(&third, 24) == 2 && tex_tiling(&third, 24, 32).wide);
+    }
+
     #[test]
     fn wide_tiles_where_they_walk_64_steps() {
         let t3d = geometry(1, 16, 20, [8, 32, 57], [3; 3]);
