@@ -2,7 +2,7 @@
 // The texture family's weight-gradient tiles (see conv_tex.wgsl for the family): x and dy
 // read through textures, dy shared across lanes by subgroup shuffles, partial sums per chunk of
 // output rows that conv_fast_weight_sum adds. Compiled appended to conv_fast.wgsl (Params,
-// chunk_rows, tap_axes, walk_from, walk_next) and conv_tex.wgsl (LaneIds, lane_tile);
+// chunk_rows, tap_axes, walk_from, walk_next) and conv_tex.wgsl (LaneIds, lane_tile1: every tile here is a workgroup of its own);
 // conv_direct_weight.wgsl's weight gradients use this file's bdy, bpart, dy_quads and dy_texel.
 
 // ---- backward weight: lanes = 8 (tap, input channel quad) pairs; dy shared by shuffles ----
@@ -71,7 +71,7 @@ fn bw_pair(t: u32, lane: u32) -> BwPair {
 }
 
 // What every weight-gradient lane needs: its pair, whether that pair is real, the tap's axes,
-// the chunk's rows, and the lane's place in the tile (tl as lane_tile returns it).
+// the chunk's rows, and the lane's place in the tile (tl as lane_tile1 returns it).
 struct BwLane { bp: BwPair, live: bool, k: vec3<u32>, span: vec2<u32>, lane: u32, base: u32 }
 
 fn bw_lane(tl: vec3<u32>) -> BwLane {

@@ -155,9 +155,9 @@ fn texture_weight_gradients_of_three_w_taps_a_lane() {
     check(&with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 1, 8, 12, [2, 3, 9]), 132);
 }
 
-/// The narrow heads' weight gradient on x in place (`conv_direct_backward_weight_w3` and
-/// `_w3x8`: 3 W taps at column stride 1, at most 8 output channels, rows of whole staging rows
-/// so x is copied into its stage), against finite differences: 16 -> 3 (a quad of dy with one
+/// The narrow heads' weight gradient on x in place (`conv_direct_backward_weight_3x3` and
+/// `_3x3x8`: a lane has a kernel depth's 3 x 3 taps of one channel; column stride 1, at most 8
+/// output channels, rows of whole staging rows so x is copied into its stage), against finite differences: 16 -> 3 (a quad of dy with one
 /// padding channel) with `Same` padding (strips start 3 columns early), 16 -> 5 (two dy quads)
 /// with 2 columns before and none after (2 early), 12 -> 8 in 3D
 /// (depth taps, channels not a multiple of 16) and 16 -> 2 unpadded (steps start on a texel),

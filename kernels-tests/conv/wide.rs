@@ -13,9 +13,11 @@ use super::*;
 /// real; rows of 8 steps, the last one 1 column wide), which runs the kernel at up to 256
 /// tiles, so on CPU adapters of up to 16 threads and on GPUs (128); and 16 -> 12 in 2D, batch 2,
 /// on 64 x 73 (rows of 10 steps, the last one 1 column wide), which runs it at up to 32 tiles
-/// (2-thread CPU adapters such as CI's; `_tex8_w3` elsewhere), as does 24 -> 12 on 96 x 64. All
-/// three leave 2-4 (tap row, channel quad) pairs past their whole groups of 8 to
-/// `conv_fast_backward_weight_tex16_w3_halves` (`conv_fast_weight::leftover_pairs`).
+/// (2-thread CPU adapters such as CI's; `_tex8_w3` elsewhere); 24 -> 12 on 96 x 64 at up to 64,
+/// and 36 -> 20 in 3D on 8 x 12 x 64 at up to 256. All four leave 1-4 (tap row, channel quad)
+/// pairs past their whole groups of 8 to `conv_fast_backward_weight_tex16_w3_halves`
+/// (`conv_fast_weight::leftover_pairs`): 4, 4, 2 (lanes idle) and 1 (with 2 output channel
+/// groups).
 #[test]
 fn texture_weight_gradient_of_16_output_channels_a_lane() {
     let with = |c: Case, n: usize, ci: usize, co: usize, input: [usize; 3]| Case { n, ci, co, input, kernel: ConvKernel::Texture, ..c };
@@ -24,6 +26,9 @@ fn texture_weight_gradient_of_16_output_channels_a_lane() {
     // 24 input channels (6 quads): 18 (tap row, quad) pairs, 2 past the whole groups, so
     // `_tex16_w3_halves` has idle pairs and its lanes 4-7 must take lanes 0-3's pairs.
     check_weight_gradient(&with(conv2d([3, 3], [1, 1], Padding::Same), 2, 24, 12, [1, 96, 64]), 172);
+    // 36 input channels (9 quads) in 3D: 81 pairs, 1 past the whole groups, with 2 output
+    // channel groups, on up to 256 tiles (16-thread CPU adapters, GPUs).
+    check_weight_gradient(&with(conv3d([3, 3, 3], [1, 1, 1], Padding::Same), 1, 36, 20, [8, 12, 64]), 173);
 }
 
 /// The weight gradient of `c`'s kernel against the reference kernel's, on random x and dy.

@@ -68,16 +68,11 @@ pub(super) fn backward_weight_tex(
         (_, true) => "conv_fast_backward_weight_tex8_w3",
         _ => "conv_fast_backward_weight_tex",
     };
-    // `_tex16_w3`'s pairs past its whole groups, where 1-4: `_halves` takes them, two lanes a
-    // pair, one tile a chunk and output channel group (see the shader).
-    let left = if t.wide { leftover_pairs(g, cpad) } else { 0 };
-    let per = copad / 16;
-    let whole = if left > 0 { tiles - t.nchunks * per } else { tiles };
+    let (whole, halves) = tex_dispatches(g, cpad, &t);
     if whole > 0 {
         gpu.dispatch(pass, TEX_SHADER, entry, &Params { total: whole as u32, ..p }, &args, tile_grid(whole)?)?;
     }
-    if left > 0 {
-        let halves = t.nchunks * per;
+    if halves > 0 {
         let entry = "conv_fast_backward_weight_tex16_w3_halves";
         gpu.dispatch(pass, TEX_SHADER, entry, &Params { total: halves as u32, ..p }, &args, tile_grid(halves)?)?;
     }
@@ -91,6 +86,19 @@ pub(super) fn backward_weight_tex(
 /// more, against 17.5 for an even share (README "A workgroup a tile").
 fn tile_grid(tiles: usize) -> Result<[u32; 3]> {
     grid_1d(tiles as u64 * 8, 8)
+}
+
+/// The tiles of the two weight-gradient dispatches of tiling `t` of `g`: of its kernel over
+/// every group of pairs, or, where `_tex16_w3` leaves 1-4 pairs past its whole groups, over
+/// the whole ones, and of `_tex16_w3_halves` (one tile a chunk and output channel group,
+/// two lanes a pair: see the shader) over the rest.
+fn tex_dispatches(g: &Geometry, cpad: usize, t: &TexTiling) -> (usize, usize) {
+    let tiles = t.nchunks * t.groups;
+    if !t.wide || leftover_pairs(g, cpad) == 0 {
+        return (tiles, 0);
+    }
+    let halves = t.nchunks * g.co.div_ceil(16);
+    (tiles - halves, halves)
 }
 
 /// The (tap row, channel quad) pairs of a `_w3` tiling of `g` past its whole groups of 8, where
@@ -254,12 +262,6 @@ mod tests {
         Geometry { n, ci, co, input: io, output: io, kernel, stride: [1; 3], pad: kernel.map(|k| k / 2), rank: 5 }
     }
 
-    /// At the 32 tiles of a 2-thread CPU adapter: 16 output channels a lane for the shapes of
-    /// the kernel test `texture_weight_gradient_of_16_output_channels_a_lane`
-    /// (kernels-tests/conv/wide.rs), so that test runs `_tex16_w3` and a narrower rule fails
-    /// here, and for the benchmark's conv3d 16->16 on 32^3; 8 where the tiles would walk fewer
-    /// than 64 steps (conv2d 32->32 on 32x32: 24), and never at 8 output channels or fewer or
-    /// off `_w3`.
     /// `_tex16_w3_halves` takes the 4 pairs past 32 of 3^3 taps on 16 channels (36) and past 8
     /// of 3x3 on 16 (12); none of 3x3 on 32 (24, whole groups), nor 5 past 40 of 3^3 on 20
     /// (a tile of them leaves 3 lanes idle, fewer than halves would).
@@ -274,8 +276,28 @@ mod tests {
         // kernels-tests/conv/wide.rs's third case: 2 past 16, and `_tex16_w3` runs.
         let third = geometry(2, 24, 12, [1, 96, 64], [1, 3, 3]);
         assert!(leftover_pairs(&third, 24) == 2 && tex_tiling(&third, 24, 32).wide);
+        // conv3d 16->16 on 32^3 at 32 tiles: 7 chunks of 4 whole groups, and a halves tile each.
+        let bench = geometry(1, 16, 16, [32; 3], [3; 3]);
+        assert_eq!(tex_dispatches(&bench, 16, &tex_tiling(&bench, 16, 32)), (28, 7));
+        // 36 -> 20 (wide.rs's fourth case): 81 pairs, 1 past 80; 2 output channel groups.
+        let fourth = geometry(1, 36, 20, [8, 12, 64], [3; 3]);
+        for tiles in [32, 256] {
+            let t = tex_tiling(&fourth, 36, tiles);
+            assert!(t.wide && leftover_pairs(&fourth, 36) == 1, "{t:?}");
+            assert_eq!(tex_dispatches(&fourth, 36, &t), (t.nchunks * 20, t.nchunks * 2));
+        }
+        // Off `_tex16_w3`, one dispatch.
+        let narrow = geometry(1, 32, 32, [1, 32, 32], [1, 3, 3]);
+        let t = tex_tiling(&narrow, 32, 32);
+        assert_eq!(tex_dispatches(&narrow, 32, &t), (t.nchunks * t.groups, 0));
     }
 
+    /// At the 32 tiles of a 2-thread CPU adapter: 16 output channels a lane for the shapes of
+    /// the kernel test `texture_weight_gradient_of_16_output_channels_a_lane`
+    /// (kernels-tests/conv/wide.rs), so that test runs `_tex16_w3` and a narrower rule fails
+    /// here, and for the benchmark's conv3d 16->16 on 32^3; 8 where the tiles would walk fewer
+    /// than 64 steps (conv2d 32->32 on 32x32: 24), and never at 8 output channels or fewer or
+    /// off `_w3`.
     #[test]
     fn wide_tiles_where_they_walk_64_steps() {
         let t3d = geometry(1, 16, 20, [8, 32, 57], [3; 3]);
