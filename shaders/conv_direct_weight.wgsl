@@ -273,11 +273,7 @@ fn strip_dy(w: StripWalk, b: BwLane, half: u32, quad: u32) -> vec4<f32> {
 struct Dy16 { d: array<vec4<f32>, 16> }
 
 fn dy16(g0: vec4<f32>, g1: vec4<f32>, base: u32) -> Dy16 {
-    return Dy16(array<vec4<f32>, 16>(
-        subgroupShuffle(g0, base), subgroupShuffle(g0, base + 1u), subgroupShuffle(g0, base + 2u), subgroupShuffle(g0, base + 3u),
-        subgroupShuffle(g0, base + 4u), subgroupShuffle(g0, base + 5u), subgroupShuffle(g0, base + 6u), subgroupShuffle(g0, base + 7u),
-        subgroupShuffle(g1, base), subgroupShuffle(g1, base + 1u), subgroupShuffle(g1, base + 2u), subgroupShuffle(g1, base + 3u),
-        subgroupShuffle(g1, base + 4u), subgroupShuffle(g1, base + 5u), subgroupShuffle(g1, base + 6u), subgroupShuffle(g1, base + 7u)));
+    return Dy16(shuffle16(g0, g1, base));
 }
 
 // The step's dy of quad `quad` (dy16 of the lanes' two texels).

@@ -74,6 +74,16 @@ fn slide(x: Rows, next: vec4<f32>) -> Rows {
 struct Acc { a0: vec4<f32>, a1: vec4<f32>, a2: vec4<f32>, a3: vec4<f32> }
 struct W16 { w: array<vec4<f32>, 16> }
 
+// Lanes base .. base + 7's a, then their b: 16 values every lane of the tile gets. Written
+// out: llvmpipe does not unroll loops, and a loop-indexed array would live in memory.
+fn shuffle16(a: vec4<f32>, b: vec4<f32>, base: u32) -> array<vec4<f32>, 16> {
+    return array<vec4<f32>, 16>(
+        subgroupShuffle(a, base), subgroupShuffle(a, base + 1u), subgroupShuffle(a, base + 2u), subgroupShuffle(a, base + 3u),
+        subgroupShuffle(a, base + 4u), subgroupShuffle(a, base + 5u), subgroupShuffle(a, base + 6u), subgroupShuffle(a, base + 7u),
+        subgroupShuffle(b, base), subgroupShuffle(b, base + 1u), subgroupShuffle(b, base + 2u), subgroupShuffle(b, base + 3u),
+        subgroupShuffle(b, base + 4u), subgroupShuffle(b, base + 5u), subgroupShuffle(b, base + 6u), subgroupShuffle(b, base + 7u));
+}
+
 fn mac(acc: Acc, x: vec4<f32>, w: W16) -> Acc {
     var r = acc;
     r.a0 += x.x * w.w[0] + x.y * w.w[4] + x.z * w.w[8] + x.w * w.w[12];
@@ -182,12 +192,7 @@ struct Tile16 { a0: Acc, a1: Acc, a2: Acc, a3: Acc, a4: Acc, a5: Acc, a6: Acc, a
 fn weights16(cg: u32, lane: u32, base: u32, y: u32) -> W16 {
     let wa = textureLoad(tw, vec2<i32>(i32(cg * 16u + lane), i32(y)));
     let wv = textureLoad(tw, vec2<i32>(i32(cg * 16u + 8u + lane), i32(y)));
-    // Written out: llvmpipe does not unroll loops, and a loop-indexed array would live in memory.
-    return W16(array<vec4<f32>, 16>(
-        subgroupShuffle(wa, base), subgroupShuffle(wa, base + 1u), subgroupShuffle(wa, base + 2u), subgroupShuffle(wa, base + 3u),
-        subgroupShuffle(wa, base + 4u), subgroupShuffle(wa, base + 5u), subgroupShuffle(wa, base + 6u), subgroupShuffle(wa, base + 7u),
-        subgroupShuffle(wv, base), subgroupShuffle(wv, base + 1u), subgroupShuffle(wv, base + 2u), subgroupShuffle(wv, base + 3u),
-        subgroupShuffle(wv, base + 4u), subgroupShuffle(wv, base + 5u), subgroupShuffle(wv, base + 6u), subgroupShuffle(wv, base + 7u)));
+    return W16(shuffle16(wa, wv, base));
 }
 
 fn mac_rows16(a: Tile16, x: Rows, w: W16) -> Tile16 {
