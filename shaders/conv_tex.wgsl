@@ -468,10 +468,10 @@ fn dot16(x: vec4<f32>, w: W16, o: u32) -> vec4<f32> {
 
 // Output quad o of one column over the 3 W taps: the 12 products summed as a tree, the
 // accumulator added last, one output quad finished before the next begins. Against three
-// `mac`s in a row (each tap's 4 products a chain, added to the accumulator in turn): 10.0 -> 8.9 ms on conv3d 16->16 3^3's
-// forward on a Zen 3 (README "Multiply-adds summed as trees"). The order matters as much as
-// the tree: the same trees with all 16 channels' sums of one tap formed first measured 1.03x,
-// not 1.12x (more partial sums live at once, so more of them spill).
+// `mac`s in a row (each tap's 4 products a chain, added to the accumulator in turn): 1.12x on
+// conv3d 16->16 3^3's forward and input gradient on a Zen 3 (README "Multiply-adds summed as
+// trees"). The order matters as much as the tree: the same trees with all 16 channels' sums of
+// one tap formed first measured 1.03x (more partial sums live at once, so more of them spill).
 fn tap3(a: vec4<f32>, x0: vec4<f32>, x1: vec4<f32>, x2: vec4<f32>, w0: W16, w1: W16, w2: W16, o: u32) -> vec4<f32> {
     return a + ((dot16(x0, w0, o) + dot16(x1, w1, o)) + dot16(x2, w2, o));
 }
