@@ -108,7 +108,7 @@ fn row3(x: Taps, a: f32, b: f32, c: f32) -> vec4<f32> {
 
 // Output row r from input rows r - 1, r, r + 1: each output channel's 9 products summed as a
 // tree, the accumulator added last, one channel finished before the next (as conv_tex.wgsl's
-// `tap3`): 1.05x on the 16->3 and 16->5 heads against a chain through the accumulator per row.
+// `mac_w3`): 1.05x on the 16->3 and 16->5 heads against a chain through the accumulator per row.
 fn mac3(o: Out, x0: Taps, x1: Taps, x2: Taps, k0: Krow, k1: Krow, k2: Krow) -> Out {
     return Out(o.o0 + ((row3(x0, k0.a.x, k0.b.x, k0.c.x) + row3(x1, k1.a.x, k1.b.x, k1.c.x)) + row3(x2, k2.a.x, k2.b.x, k2.c.x)),
                o.o1 + ((row3(x0, k0.a.y, k0.b.y, k0.c.y) + row3(x1, k1.a.y, k1.b.y, k1.c.y)) + row3(x2, k2.a.y, k2.b.y, k2.c.y)),

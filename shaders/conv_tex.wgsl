@@ -460,26 +460,28 @@ fn x6(n: u32, q: u32, zd: u32, zh: i32, zw: i32) -> X6 {
               tex_x(n, q, zd, zh, zw + 3), tex_x(n, q, zd, zh, zw + 4), tex_x(n, q, zd, zh, zw + 5));
 }
 
-// Output quad o (a constant at every call) of x's 4 channels times their weights, summed as a
-// tree.
-fn dot16(x: vec4<f32>, w: W16, o: u32) -> vec4<f32> {
-    return (x.x * w.w[o] + x.y * w.w[4u + o]) + (x.z * w.w[8u + o] + x.w * w.w[12u + o]);
+// x's 4 channels times one output quad's weights (a..d: input channels 0..3), summed as a tree.
+fn dot4(x: vec4<f32>, a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, d: vec4<f32>) -> vec4<f32> {
+    return (x.x * a + x.y * b) + (x.z * c + x.w * d);
 }
 
-// Output quad o of one column over the 3 W taps: the 12 products summed as a tree, the
-// accumulator added last, one output quad finished before the next begins. Against three
-// `mac`s in a row (each tap's 4 products a chain, added to the accumulator in turn): 1.12x on
-// conv3d 16->16 3^3's forward and input gradient on a Zen 3 (README "Multiply-adds summed as
-// trees"). The order matters as much as the tree: the same trees with all 16 channels' sums of
-// one tap formed first measured 1.03x (more partial sums live at once, so more of them spill).
-fn tap3(a: vec4<f32>, x0: vec4<f32>, x1: vec4<f32>, x2: vec4<f32>, w0: W16, w1: W16, w2: W16, o: u32) -> vec4<f32> {
-    return a + ((dot16(x0, w0, o) + dot16(x1, w1, o)) + dot16(x2, w2, o));
-}
-
-// One column's 16 channels through the 3 W taps (x0..x2 the texels they reach).
+// One column's 16 channels through the 3 W taps (x0..x2 the texels they reach). Each output
+// quad's 12 products are summed as a tree, the accumulator added last, and one quad is finished
+// before the next begins. Against three `mac`s in a row (each tap's 4 products a chain, added
+// to the accumulator in turn): 1.12x on conv3d 16->16 3^3's forward and input gradient on a
+// Zen 3 (README "Multiply-adds summed as trees"). The order matters as much as the tree: the
+// same trees with each tap's 16 channel sums formed first measured 1.03x (more partial sums
+// live at once, so more of them spill). Literal indices only: a runtime index into the W16
+// value would have naga copy it to a temporary at every access.
 fn mac_w3(a: Acc, x0: vec4<f32>, x1: vec4<f32>, x2: vec4<f32>, w0: W16, w1: W16, w2: W16) -> Acc {
-    return Acc(tap3(a.a0, x0, x1, x2, w0, w1, w2, 0u), tap3(a.a1, x0, x1, x2, w0, w1, w2, 1u),
-               tap3(a.a2, x0, x1, x2, w0, w1, w2, 2u), tap3(a.a3, x0, x1, x2, w0, w1, w2, 3u));
+    return Acc(a.a0 + ((dot4(x0, w0.w[0], w0.w[4], w0.w[8], w0.w[12]) + dot4(x1, w1.w[0], w1.w[4], w1.w[8], w1.w[12]))
+                       + dot4(x2, w2.w[0], w2.w[4], w2.w[8], w2.w[12])),
+               a.a1 + ((dot4(x0, w0.w[1], w0.w[5], w0.w[9], w0.w[13]) + dot4(x1, w1.w[1], w1.w[5], w1.w[9], w1.w[13]))
+                       + dot4(x2, w2.w[1], w2.w[5], w2.w[9], w2.w[13])),
+               a.a2 + ((dot4(x0, w0.w[2], w0.w[6], w0.w[10], w0.w[14]) + dot4(x1, w1.w[2], w1.w[6], w1.w[10], w1.w[14]))
+                       + dot4(x2, w2.w[2], w2.w[6], w2.w[10], w2.w[14])),
+               a.a3 + ((dot4(x0, w0.w[3], w0.w[7], w0.w[11], w0.w[15]) + dot4(x1, w1.w[3], w1.w[7], w1.w[11], w1.w[15]))
+                       + dot4(x2, w2.w[3], w2.w[7], w2.w[11], w2.w[15])));
 }
 
 fn mac_cols4(a: Cols4, x: X6, w0: W16, w1: W16, w2: W16) -> Cols4 {
