@@ -8,7 +8,8 @@
 # Made for issue 10's "on an Intel machine nothing is slower than today": d07c615 is the code
 # as it stood when that issue was filed, and its tiled kernels are the `fast` family.
 # A conv row compares the old kernel with the best of the new families and lists each new
-# family's ratio: Auto runs one family per device, so the whole-network rows are what a user gets.
+# family's ratio: Auto runs what its calibrations picked for the device, not the fastest kernel
+# of each row, so the whole-network rows are what a user gets.
 # Usage: bash ci/versus.sh [rev] [rounds] [-- bench args both binaries take, e.g. --filter conv3d]
 #   rev defaults to d07c615, rounds to 2; RENDERNET_VERSUS_OLD_KERNEL (default fast) and
 #   RENDERNET_VERSUS_NEW_KERNEL (default fast,texture,nchw) pick each side's --kernel.
@@ -88,10 +89,11 @@ for key in [k for k in new if k in old]:
     o, n = best(old[key]), best(new[key])
     ceil = [r["fma_ceiling_gflops"] for rs in new[key].values() for r in rs if r.get("fma_ceiling_gflops") is not None]
     ratio = n["ms"] / o["ms"]
-    slower += ratio > 1.0
     span = f"{min(ceil):.0f}-{max(ceil):.0f}" if ceil else "-"
     families = ", ".join(f"{k} {min(r['ms'] for r in rs) / o['ms']:.3f}" for k, rs in new[key].items())
-    mark = "  SLOWER" if ratio > 1.0 else ""
+    is_slower = ratio > 1.0
+    slower += is_slower
+    mark = "  SLOWER" if is_slower else ""
     print(f"{key[0]:<16} {key[1]:<50} {key[2]:<15} {o['ms']:>9.3f} {n['ms']:>9.3f} {ratio:>8.3f}  {n['kernel']}, {span}; {families}{mark}")
 only = sorted(set(old) ^ set(new))
 if only:
